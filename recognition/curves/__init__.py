@@ -1,0 +1,36 @@
+"""Chapter 3: recognition of planar algebraic curves by differential invariants."""
+
+from recognition.curves.estimation import (
+    LocalGeometry,
+    finite_difference_geometry,
+    local_fit_geometry,
+)
+from recognition.curves.families import CanonicalCurve, CurveKind
+from recognition.curves.recognition import (
+    ClassFit,
+    CurveRecognition,
+    recognize_curve,
+    recognize_points,
+)
+from recognition.curves.sampling import (
+    SampledCurve,
+    random_curve,
+    random_rigid_motion,
+    sample_by_arc_length,
+)
+
+__all__ = [
+    "CanonicalCurve",
+    "ClassFit",
+    "CurveKind",
+    "CurveRecognition",
+    "LocalGeometry",
+    "SampledCurve",
+    "finite_difference_geometry",
+    "local_fit_geometry",
+    "random_curve",
+    "random_rigid_motion",
+    "recognize_curve",
+    "recognize_points",
+    "sample_by_arc_length",
+]

@@ -1,0 +1,24 @@
+"""Exceptions raised by the recognition library."""
+
+__all__ = [
+    "DegenerateGeometry",
+    "InvalidCurveData",
+    "NoRealSolution",
+    "RecognitionError",
+]
+
+
+class RecognitionError(Exception):
+    """Base class of every error the recognition library raises on purpose."""
+
+
+class InvalidCurveData(RecognitionError, ValueError):
+    """Input points or estimates are malformed: too few, NaN, repeated or unordered."""
+
+
+class DegenerateGeometry(RecognitionError, ValueError):
+    """The geometry is valid input but cannot be processed (e.g. a straight segment, kappa = 0)."""
+
+
+class NoRealSolution(RecognitionError, ArithmeticError):
+    """An equation the method relies on (e.g. the slope quartic (3.31)) has no real root."""
