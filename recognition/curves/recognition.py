@@ -33,7 +33,7 @@ Every class hypothesis is initialised from the thesis's invariants and then refi
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from scipy.optimize import least_squares
@@ -101,6 +101,10 @@ class ClassFit:
         The thesis's invariant values evaluated on the data for this class.
     message : str
         Why the class was rejected, if it was.
+    per_point : (m,) float or None
+        Each point's residual norm in the final fit (of the points used).
+    outliers : tuple of int
+        Points left out as estimation outliers (their t is NaN).
     """
 
     kind: CurveKind
@@ -111,6 +115,8 @@ class ClassFit:
     orientation: int
     invariants: dict[str, np.ndarray] = field(default_factory=dict)
     message: str = ""
+    per_point: np.ndarray | None = None
+    outliers: tuple[int, ...] = ()
 
     @property
     def parameters(self) -> dict[str, float]:
@@ -172,10 +178,11 @@ class _Data:
         return self.kappa.size
 
     def subset(self, keep) -> _Data:
+        """The points ``keep``, tangent angles again relative to the first of them."""
         return _Data(
             self.kappa[keep],
             self.kappa_s[keep],
-            None if self.phi is None else self.phi[keep],
+            None if self.phi is None else self.phi[keep] - self.phi[keep][0],
             self.kappa_scale[keep],
             self.kappa_s_scale[keep],
         )
@@ -293,43 +300,27 @@ def _least_squares(kind, n_p: int, x0: np.ndarray, sigma: float, data: _Data):
 OUTLIER_FACTOR = 5.0
 #: At most this fraction of the points is left out as outliers.
 MAX_OUTLIER_FRACTION = 0.1
+#: With at least this many points, one outlier may be left out even below 10 points.
+MIN_POINTS_FOR_OUTLIERS = 6
 
 
 def _refine(kind, guess: _Guess, data: _Data) -> ClassFit:
-    """Least-squares refinement of (params, psi, t_i) from an initial guess.
-
-    Estimates of kappa_s are least reliable where the curvature changes fastest (a few
-    points near a cusp or a sharp bend); after a first fit, at most
-    ``MAX_OUTLIER_FRACTION`` of the points whose residual exceeds ``OUTLIER_FACTOR``
-    times the median are left out and the fit is repeated on the rest.
-    """
+    """Least-squares refinement of (params, psi, t_i) from an initial guess."""
     n_p = len(guess.params)
     use_psi = data.phi is not None
     head = n_p + (1 if use_psi else 0)
     x0 = np.concatenate([guess.params, [guess.psi] if use_psi else [], guess.t])
     x, r = _least_squares(kind, n_p, x0, guess.sigma, data)
-    t = x[head:].copy()
-    per_point = np.sqrt(np.sum(r.reshape(-1, data.m) ** 2, axis=0))
-    limit = OUTLIER_FACTOR * np.median(per_point)
-    worst = np.argsort(-per_point)[: int(MAX_OUTLIER_FRACTION * data.m)]
-    outliers = worst[per_point[worst] > limit]
-    if outliers.size:
-        keep = np.setdiff1d(np.arange(data.m), outliers)
-        x_sub, r = _least_squares(
-            kind, n_p, np.concatenate([x[:head], t[keep]]), guess.sigma, data.subset(keep)
-        )
-        x = np.concatenate([x_sub[:head], t])
-        x[head + keep] = x_sub[head:]
-        t = x[head:].copy()
-    params, t, sigma = _canonical(kind, tuple(float(v) for v in x[:n_p]), t, guess.sigma)
+    params, t, sigma = _canonical(kind, tuple(float(v) for v in x[:n_p]), x[head:], guess.sigma)
     return ClassFit(
         kind,
         params,
-        float(_reduced_rms(r, x0.size - outliers.size)),
-        t,
+        float(_reduced_rms(r, x0.size)),
+        t.copy(),
         float(np.mod(x[n_p], 2 * np.pi)) if use_psi else None,
         int(sigma),
         guess.invariants,
+        per_point=np.sqrt(np.sum(r.reshape(-1, data.m) ** 2, axis=0)),
     )
 
 
@@ -337,8 +328,10 @@ def _refine(kind, guess: _Guess, data: _Data) -> ClassFit:
 N_REFINED = 2
 
 
-def _refine_best(kind, guesses: list[_Guess], data: _Data, message: str) -> ClassFit:
-    """Score every initial guess in one batch and refine the best ``N_REFINED``."""
+def _refine_best(
+    kind, guesses: list[_Guess], data: _Data, message: str, n_refined: int = N_REFINED
+) -> ClassFit:
+    """Score every initial guess in one batch and refine the best ``n_refined``."""
     guesses = [g for g in guesses if all(np.isfinite(g.params)) and np.all(np.isfinite(g.t))]
     if not guesses:
         return _rejected(kind, message)
@@ -351,7 +344,7 @@ def _refine_best(kind, guesses: list[_Guess], data: _Data, message: str) -> Clas
         np.array([g.sigma for g in guesses]),
         data,
     )
-    order = np.argsort(_reduced_rms(r, 0))[:N_REFINED]
+    order = np.argsort(_reduced_rms(r, 0))[:n_refined]
     return _best([_refine(kind, guesses[i], data) for i in order])
 
 
@@ -538,19 +531,31 @@ def _spline_contact_geometry(a, b, c, t):
     return k, dk / np.sqrt(sp2)
 
 
-def _spline_guesses(data: _Data, n_psi: int = 90, n_t: int = 24) -> list[_Guess]:
+#: Bands of psi in each of which the spline grid search keeps its best cell.
+SPLINE_PSI_BANDS = 6
+#: Initial spline guesses refined by least squares.
+SPLINE_REFINED = 4
+
+
+def _spline_guesses(data: _Data, n_psi: int = 120, n_t: int = 32) -> list[_Guess]:
     """Initial spline shapes: closed form at one contact, scored at the others.
 
     For each rotation psi (slopes lam_i = tan(phi_i + psi)), orientation and t_j on a
     log grid, (a, b, c) follow from a reference contact j (errata item 7); every other
     contact's t solves the slope equation (3.39) and its exact kappa, kappa_s are
-    compared with the measured ones. References are the middle contact and the two of
-    largest |kappa| (a contact near an inflection is ill-conditioned).
+    compared with the measured ones. References are the contacts at a quarter, half and
+    three quarters of the data and the two of largest |kappa| (a contact near an
+    inflection is ill-conditioned); in each band of psi the best cell is kept.
     """
     psi = np.linspace(0.0, np.pi, n_psi, endpoint=False)
     lam = np.tan(data.phi[None, :] + psi[:, None])  # (P, m)
     u = np.geomspace(0.03, 6.0, n_t)
-    refs = {data.m // 2, *np.argsort(-np.abs(data.kappa))[:2].tolist()}
+    refs = {
+        data.m // 4,
+        data.m // 2,
+        (3 * data.m) // 4,
+        *np.argsort(-np.abs(data.kappa))[:2].tolist(),
+    }
     guesses = []
     for j in sorted(refs):
         for sign in (1.0, -1.0):
@@ -576,23 +581,31 @@ def _spline_guesses(data: _Data, n_psi: int = 90, n_t: int = 24) -> list[_Guess]
                     )
                     e = np.where(np.isfinite(e), e, np.inf)
                     total = np.sum(e.min(axis=0), axis=-1)
-                p, q = np.unravel_index(np.argmin(total), total.shape)
-                if not np.isfinite(total[p, q]):
-                    continue
-                # each contact's parameter: the root of (3.39) that fits it best
-                t = roots[np.argmin(e[:, p, q], axis=0), p, q, np.arange(data.m)]
-                params = (a[p, q], b[p, q], c[p, q])
-                if params[0] < 0:  # t -> -t gives the same curve with (-a, b, -c)
-                    params, t, sigma_inc = (-params[0], params[1], -params[2]), -t, -sigma_inc
-                with np.errstate(all="ignore"):
-                    g = inv.cubic_spline_residual(
-                        a[p, q], b[p, q], lam[p], sign * data.kappa, data.kappa_s
+                # the best cell in each band of psi: distinct basins, not one basin twice
+                bands = total.reshape(SPLINE_PSI_BANDS, -1)
+                for band, flat in enumerate(np.argmin(bands, axis=1)):
+                    if not np.isfinite(bands[band, flat]):
+                        continue
+                    p, q = np.unravel_index(band * bands.shape[1] + flat, total.shape)
+                    # each contact's parameter: the root of (3.39) that fits it best
+                    t = roots[np.argmin(e[:, p, q], axis=0), p, q, np.arange(data.m)]
+                    params = (a[p, q], b[p, q], c[p, q])
+                    sigma = sigma_inc
+                    if params[0] < 0:  # t -> -t gives the same curve with (-a, b, -c)
+                        params, t, sigma = (-params[0], params[1], -params[2]), -t, -sigma
+                    with np.errstate(all="ignore"):
+                        g = inv.cubic_spline_residual(
+                            a[p, q], b[p, q], lam[p], sign * data.kappa, data.kappa_s
+                        )
+                    guesses.append(
+                        _Guess(
+                            tuple(float(v) for v in params),
+                            t,
+                            float(psi[p]),
+                            float(sigma),
+                            {"g": g},
+                        )
                     )
-                guess = _Guess(
-                    tuple(float(v) for v in params), t, float(psi[p]), float(sigma_inc), {"g": g}
-                )
-                if not any(np.allclose(guess.params, o.params) for o in guesses):
-                    guesses.append(guess)
     return guesses
 
 
@@ -602,6 +615,7 @@ def _fit_cubic_spline(data: _Data) -> ClassFit:
         _spline_guesses(data),
         data,
         "no spline shape is consistent with the contacts",
+        SPLINE_REFINED,
     )
 
 
@@ -612,7 +626,35 @@ def fit_class(kind: CurveKind | str, kappa, kappa_s, dphi=None) -> ClassFit:
     return _fit_one(kind, data)
 
 
-def _fit_one(kind, data):
+def _fit_one(kind, data: _Data) -> ClassFit:
+    """Fit one class; then leave out estimation outliers and fit again from scratch.
+
+    Estimates of kappa_s are least reliable where the curvature changes fastest (a few
+    points near a cusp or a sharp bend). After a first fit, at most
+    ``MAX_OUTLIER_FRACTION`` of the points (one point from ``MIN_POINTS_FOR_OUTLIERS``
+    points up) whose residual exceeds ``OUTLIER_FACTOR`` times the median are left out
+    and the class is fitted again, initialisation included, on the rest. Their contact
+    parameters are NaN and their indices are in ``ClassFit.outliers``.
+    """
+    fit = _fit_class_once(kind, data)
+    if not np.isfinite(fit.residual) or fit.per_point is None:
+        return fit
+    per_point = fit.per_point
+    n_out = max(int(MAX_OUTLIER_FRACTION * data.m), 1 if data.m >= MIN_POINTS_FOR_OUTLIERS else 0)
+    worst = np.argsort(-per_point)[:n_out]
+    outliers = np.sort(worst[per_point[worst] > OUTLIER_FACTOR * np.median(per_point)])
+    if outliers.size == 0:
+        return fit
+    keep = np.setdiff1d(np.arange(data.m), outliers)
+    again = _fit_class_once(kind, data.subset(keep))
+    if not again.residual < fit.residual:
+        return fit
+    t = np.full(data.m, np.nan)
+    t[keep] = again.t
+    return replace(again, t=t, outliers=tuple(int(i) for i in outliers))
+
+
+def _fit_class_once(kind, data: _Data) -> ClassFit:
     if kind in NEEDS_SLOPE and data.phi is None:
         return _rejected(kind, "needs the tangent rotations dphi")
     if kind is CurveKind.PARABOLA:
@@ -667,8 +709,7 @@ def recognize_curve(
         raise DegenerateGeometry(
             "the tangent does not turn: a straight segment has no curvature invariants"
         )
-    fits = [_fit_parabola(data), *_fit_conic(data)]
-    fits += [_fit_one(k, data) for k in CLASS_ORDER[3:]]
+    fits = [_fit_one(k, data) for k in CLASS_ORDER]
 
     chosen = None
     best = _best(fits)
