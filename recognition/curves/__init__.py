@@ -1,5 +1,6 @@
 """Chapter 3: recognition of planar algebraic curves by differential invariants."""
 
+from recognition.curves import invariants, reduction
 from recognition.curves.estimation import (
     LocalGeometry,
     finite_difference_geometry,
@@ -27,10 +28,12 @@ __all__ = [
     "LocalGeometry",
     "SampledCurve",
     "finite_difference_geometry",
+    "invariants",
     "local_fit_geometry",
     "random_curve",
     "random_rigid_motion",
     "recognize_curve",
     "recognize_points",
+    "reduction",
     "sample_by_arc_length",
 ]

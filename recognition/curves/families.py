@@ -95,6 +95,7 @@ def canonical_derivatives(kind: CurveKind, params, t) -> np.ndarray:
     (4, 2, ..., n) float
         ``[k, :, ..., i]`` is the k-th derivative of (x, y) at ``t[..., i]``.
     """
+    kind = CurveKind(kind)
     t = np.asarray(t, dtype=float)
     if kind in (CurveKind.ELLIPSE, CurveKind.HYPERBOLA):
         a, b = (np.asarray(v, dtype=float)[..., None] for v in params)
@@ -160,6 +161,7 @@ class CanonicalCurve:
     params: tuple[float, ...]
 
     def __post_init__(self):
+        object.__setattr__(self, "kind", CurveKind(self.kind))
         if self.kind is CurveKind.UNCLASSIFIED:
             raise InvalidCurveData("an unclassified curve has no canonical form")
         expected = N_PARAMETERS[self.kind]
