@@ -1,0 +1,219 @@
+"""Three concurrent data curves on a surface (thesis Section 4.1.1): the seam of the project."""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from recognition.errors import DegenerateGeometry, InvalidCurveData
+
+__all__ = ["DataCurves", "closest_points_between_polylines"]
+
+#: Default largest gap (metres) between the curves at their common point.
+MEET_TOLERANCE_M = 1.0e-3
+#: Smallest angle between two curve tangents at the common point (radians).
+MIN_TANGENT_ANGLE = np.deg2rad(5.0)
+#: Each curve needs at least this many points.
+MIN_POINTS = 5
+
+
+def closest_points_between_polylines(a: np.ndarray, b: np.ndarray):
+    """Closest pair of points between two polylines.
+
+    Parameters
+    ----------
+    a, b : (n, 3), (k, 3) float
+        Ordered points of each polyline.
+
+    Returns
+    -------
+    point_a, point_b : (3,) float
+        The closest points, on a segment of ``a`` and of ``b``.
+    distance : float
+    """
+    p0, d0 = a[:-1], np.diff(a, axis=0)  # (n-1, 3)
+    q0, d1 = b[:-1], np.diff(b, axis=0)  # (k-1, 3)
+    r = p0[:, None, :] - q0[None, :, :]
+    A = np.einsum("ik,ik->i", d0, d0)[:, None]
+    E = np.einsum("jk,jk->j", d1, d1)[None, :]
+    B = np.einsum("ik,jk->ij", d0, d1)
+    C = np.einsum("ik,ijk->ij", d0, r)
+    F = np.einsum("jk,ijk->ij", d1, r)
+    denom = A * E - B * B
+    with np.errstate(divide="ignore", invalid="ignore"):
+        s = np.where(denom > 1e-30, (B * F - C * E) / denom, 0.0)
+    s = np.clip(s, 0.0, 1.0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = np.clip((B * s + F) / E, 0.0, 1.0)
+        s = np.clip((B * t - C) / A, 0.0, 1.0)
+    pa = p0[:, None, :] + s[..., None] * d0[:, None, :]
+    pb = q0[None, :, :] + t[..., None] * d1[None, :, :]
+    dist = np.linalg.norm(pa - pb, axis=-1)
+    i, j = np.unravel_index(np.argmin(dist), dist.shape)
+    return pa[i, j], pb[i, j], float(dist[i, j])
+
+
+@dataclass(frozen=True)
+class DataCurves:
+    """Three (or more) data curves sampled on a surface, all passing through one point p.
+
+    Attributes
+    ----------
+    curves : tuple of (n_i, 3) float arrays
+        Points in metres, ordered along each curve (thesis: alpha, beta, gamma).
+    meet_tolerance_m : float
+        Largest allowed gap between the curves at their common point.
+    approach : (3,) float or None
+        Unit direction in which the sensor approached the surface (pointing into the
+        object), same frame as the curves. It orients the surface normal outward; when
+        None, registration tries both orientations.
+
+    The common point :attr:`intersection` is the mean of the pairwise closest points of
+    the curves. Construction validates the data and raises
+    :class:`~recognition.errors.InvalidCurveData` (malformed input, curves that do not
+    meet) or :class:`~recognition.errors.DegenerateGeometry` (tangents at p that do not
+    span a plane, two identical sampling planes).
+    """
+
+    curves: tuple[np.ndarray, ...]
+    meet_tolerance_m: float = MEET_TOLERANCE_M
+    approach: np.ndarray | None = None
+    intersection: np.ndarray = field(init=False, repr=False, compare=False)
+    gap_m: float = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self):
+        curves = tuple(self._validated(c, i) for i, c in enumerate(self.curves))
+        if len(curves) < 3:
+            raise InvalidCurveData(f"expected three data curves (or more), got {len(curves)}")
+        object.__setattr__(self, "curves", curves)
+        if self.approach is not None:
+            v = np.array(self.approach, dtype=float).reshape(-1)
+            if v.shape != (3,) or not np.all(np.isfinite(v)) or not np.linalg.norm(v) > 0:
+                raise InvalidCurveData(f"approach must be a finite non-zero 3-vector, got {v}")
+            object.__setattr__(self, "approach", v / np.linalg.norm(v))
+        pairs = []
+        gap = 0.0
+        for i in range(len(curves)):
+            for j in range(i + 1, len(curves)):
+                pa, pb, d = closest_points_between_polylines(curves[i], curves[j])
+                pairs += [pa, pb]
+                gap = max(gap, d)
+        if not gap <= self.meet_tolerance_m:
+            raise InvalidCurveData(
+                f"the curves do not meet at one point: they pass {gap * 1e3:.3g} mm apart, "
+                f"expected at most {self.meet_tolerance_m * 1e3:.3g} mm"
+            )
+        object.__setattr__(self, "intersection", np.mean(pairs, axis=0))
+        object.__setattr__(self, "gap_m", float(gap))
+        self._check_tangents()
+
+    @staticmethod
+    def _validated(curve, index: int) -> np.ndarray:
+        c = np.array(curve, dtype=float)
+        if c.ndim != 2 or c.shape[1] != 3:
+            raise InvalidCurveData(f"curve {index} must be an (n, 3) array, got shape {c.shape}")
+        if c.shape[0] < MIN_POINTS:
+            raise InvalidCurveData(
+                f"curve {index} has {c.shape[0]} points; expected at least {MIN_POINTS}"
+            )
+        if not np.all(np.isfinite(c)):
+            raise InvalidCurveData(f"curve {index} has NaN or infinite coordinates")
+        step = np.linalg.norm(np.diff(c, axis=0), axis=1)
+        if np.any(step <= 1e-9 * max(float(np.median(step)), 1e-300)):
+            raise InvalidCurveData(
+                f"curve {index} repeats a point; expected distinct points in order"
+            )
+        c.setflags(write=False)
+        return c
+
+    def _check_tangents(self):
+        """Tangents at p must not be parallel; the sampling planes must differ."""
+        tangents = [self.chord_direction(i) for i in range(len(self.curves))]
+        normals = [self.plane_normal(i) for i in range(len(self.curves))]
+        for i in range(len(tangents)):
+            for j in range(i + 1, len(tangents)):
+                sin_t = np.linalg.norm(np.cross(tangents[i], tangents[j]))
+                if sin_t < np.sin(MIN_TANGENT_ANGLE):
+                    same_plane = np.linalg.norm(np.cross(normals[i], normals[j])) < np.sin(
+                        MIN_TANGENT_ANGLE
+                    )
+                    what = (
+                        "lie in the same sampling plane"
+                        if same_plane
+                        else "have parallel tangents at the common point"
+                    )
+                    raise DegenerateGeometry(
+                        f"curves {i} and {j} {what}; expected sampling planes at least "
+                        f"{np.rad2deg(MIN_TANGENT_ANGLE):.0f} deg apart about the normal"
+                    )
+
+    def chord_direction(self, index: int) -> np.ndarray:
+        """Unit chord direction of curve ``index`` across the two samples either side of p."""
+        c = self.curves[index]
+        i0 = int(np.argmin(np.linalg.norm(c - self.intersection, axis=1)))
+        lo, hi = max(i0 - 2, 0), min(i0 + 2, c.shape[0] - 1)
+        u = c[hi] - c[lo]
+        return u / np.linalg.norm(u)
+
+    def plane_normal(self, index: int) -> np.ndarray:
+        """Unit normal of the best-fit plane of curve ``index`` (sign arbitrary)."""
+        c = self.curves[index]
+        return np.linalg.svd(c - c.mean(axis=0), full_matrices=False)[2][-1]
+
+    @property
+    def points(self) -> np.ndarray:
+        """All data points stacked, (sum n_i, 3)."""
+        return np.concatenate(self.curves)
+
+    @property
+    def n_points(self) -> int:
+        return sum(c.shape[0] for c in self.curves)
+
+    def transformed(self, T: np.ndarray) -> DataCurves:
+        """The curves moved by a 4x4 rigid transform ``T``."""
+        T = np.asarray(T, dtype=float)
+        approach = None if self.approach is None else T[:3, :3] @ self.approach
+        return DataCurves(
+            tuple(c @ T[:3, :3].T + T[:3, 3] for c in self.curves),
+            self.meet_tolerance_m,
+            approach,
+        )
+
+    def save(self, path) -> Path:
+        """Write the curves to ``path`` (.npz, no pickle), atomically."""
+        path = Path(path)
+        arrays = {f"curve_{i}": c for i, c in enumerate(self.curves)}
+        arrays["meet_tolerance_m"] = np.array(self.meet_tolerance_m)
+        if self.approach is not None:
+            arrays["approach"] = self.approach
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".npz.tmp")
+        try:
+            with os.fdopen(fd, "wb") as f:
+                np.savez(f, **arrays)
+            os.replace(tmp, path)
+        except BaseException:
+            Path(tmp).unlink(missing_ok=True)
+            raise
+        return path
+
+    @classmethod
+    def load(cls, path) -> DataCurves:
+        """Read curves written by :meth:`save`."""
+        path = Path(path)
+        try:
+            with np.load(path, allow_pickle=False) as z:
+                keys = sorted(
+                    (k for k in z.files if k.startswith("curve_")),
+                    key=lambda k: int(k.split("_")[1]),
+                )
+                curves = tuple(z[k] for k in keys)
+                tol = float(z["meet_tolerance_m"]) if "meet_tolerance_m" in z.files else None
+                approach = z["approach"] if "approach" in z.files else None
+        except (OSError, ValueError, KeyError) as exc:
+            raise InvalidCurveData(f"cannot read data curves from {path}: {exc}") from exc
+        return cls(curves, tol if tol is not None else MEET_TOLERANCE_M, approach)

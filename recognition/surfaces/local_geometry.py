@@ -1,0 +1,257 @@
+"""Surface normal and principal curvatures at the common point of the data curves (4.1.1).
+
+Conventions: the surface normal points out of the object; a normal curvature is
+positive where the surface bends away from the normal (a convex surface, e.g. a sphere of
+radius r, has k1 = k2 = 1/r). ``k1 >= k2``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from recognition.errors import DegenerateGeometry
+from recognition.surfaces.data_curves import DataCurves
+
+__all__ = [
+    "CurveFrame",
+    "LocalSurfaceGeometry",
+    "curve_frame_at",
+    "local_surface_geometry",
+    "normal_curvature",
+    "principal_curvatures_from_normal_curvatures",
+    "principal_curvatures_thesis",
+    "surface_normal",
+]
+
+#: Default half length (metres) of the arc around p used by the curve fits.
+FIT_HALF_LENGTH_M = 6.0e-3
+#: Default degree of the polynomial fitted to each data curve around p.
+FIT_DEGREE = 4
+
+
+@dataclass(frozen=True)
+class CurveFrame:
+    """Local geometry of one data curve at p (thesis Fig. 4.2).
+
+    Attributes
+    ----------
+    point : (3,) float
+        The fitted curve's point nearest p.
+    tangent : (3,) float
+        Unit tangent T, in the direction of the curve's point order.
+    normal : (3,) float
+        Unit principal normal N_c, towards the centre of curvature.
+    curvature : float
+        Curvature kappa >= 0, 1/m.
+    plane_normal : (3,) float
+        Unit normal of the sampling plane.
+    """
+
+    point: np.ndarray
+    tangent: np.ndarray
+    normal: np.ndarray
+    curvature: float
+    plane_normal: np.ndarray
+
+
+@dataclass(frozen=True)
+class LocalSurfaceGeometry:
+    """Normal and principal curvatures at the data curves' common point.
+
+    Attributes
+    ----------
+    point : (3,) float
+        The common point p.
+    normal : (3,) float
+        Unit surface normal N (outward if the data carry an approach direction).
+    k1, k2 : float
+        Principal curvatures, k1 >= k2, 1/m (convex positive).
+    d1, d2 : (3,) float
+        Unit principal directions (tangent to the surface).
+    frames : tuple of CurveFrame
+    normal_curvatures : (k,) float
+        Normal curvature along each curve's tangent, Euler's theorem (4.2)-(4.4).
+    oriented : bool
+        True when the normal's sign came from the data's approach direction.
+    """
+
+    point: np.ndarray
+    normal: np.ndarray
+    k1: float
+    k2: float
+    d1: np.ndarray
+    d2: np.ndarray
+    frames: tuple[CurveFrame, ...]
+    normal_curvatures: np.ndarray
+    oriented: bool
+
+    def flipped(self) -> LocalSurfaceGeometry:
+        """The same geometry seen with the opposite normal: (k1, k2) -> (-k2, -k1)."""
+        return LocalSurfaceGeometry(
+            self.point,
+            -self.normal,
+            -self.k2,
+            -self.k1,
+            self.d2,
+            self.d1,
+            self.frames,
+            -self.normal_curvatures,
+            self.oriented,
+        )
+
+    @property
+    def frame(self) -> np.ndarray:
+        """(3, 3) rotation whose columns are (d1, d2, N): the local frame at p."""
+        return np.column_stack([self.d1, self.d2, self.normal])
+
+
+def _plane_fit(points: np.ndarray):
+    centroid = points.mean(axis=0)
+    _, _, vt = np.linalg.svd(points - centroid, full_matrices=False)
+    return centroid, vt  # rows: two in-plane directions, then the plane normal
+
+
+def curve_frame_at(
+    curve: np.ndarray,
+    p: np.ndarray,
+    *,
+    half_length_m: float = FIT_HALF_LENGTH_M,
+    degree: int = FIT_DEGREE,
+) -> CurveFrame:
+    """Tangent, normal and curvature of a data curve at p (thesis Section 4.1.1.1).
+
+    A plane is fitted to the whole curve; in that plane a polynomial ``y = f(x)`` (the
+    thesis uses a quadratic) is fitted over the points within ``half_length_m`` of p,
+    in a frame whose x axis is the local chord; tangent, normal and curvature come from
+    its derivatives at the abscissa of p.
+    """
+    _, vt = _plane_fit(curve)
+    plane_normal = vt[2]
+    near = np.linalg.norm(curve - p, axis=1) <= half_length_m
+    if np.count_nonzero(near) < degree + 2:
+        order = np.argsort(np.linalg.norm(curve - p, axis=1))
+        near = np.zeros(curve.shape[0], bool)
+        near[order[: degree + 2]] = True
+    idx = np.flatnonzero(near)
+    local = curve[idx[0] : idx[-1] + 1]
+    if local.shape[0] < degree + 2:
+        raise DegenerateGeometry(
+            f"a data curve has {local.shape[0]} points near p; the fit needs {degree + 2}"
+        )
+    chord = local[-1] - local[0]
+    chord -= plane_normal * (chord @ plane_normal)
+    ex = chord / np.linalg.norm(chord)
+    ey = np.cross(plane_normal, ex)
+    rel = local - p
+    x, y = rel @ ex, rel @ ey
+    scale = max(np.abs(x).max(), 1e-12)
+    coef = np.polynomial.polynomial.polyfit(x / scale, y, degree)
+    y0 = coef[0]
+    y1 = coef[1] / scale
+    y2 = 2.0 * coef[2] / scale**2
+    g = np.sqrt(1.0 + y1 * y1)
+    tangent = (ex + y1 * ey) / g
+    kappa_signed = y2 / g**3  # positive: bends towards +ey
+    in_plane_normal = (-y1 * ex + ey) / g
+    normal = np.sign(kappa_signed or 1.0) * in_plane_normal
+    return CurveFrame(p + y0 * ey, tangent, normal, float(abs(kappa_signed)), plane_normal)
+
+
+def surface_normal(tangents: np.ndarray) -> np.ndarray:
+    """Unit N minimising sum_i (N . T_i)^2, thesis Eq. (4.1) (sign arbitrary).
+
+    The minimiser is the eigenvector of ``sum_i T_i T_i^T`` of least eigenvalue.
+    """
+    T = np.asarray(tangents, dtype=float)
+    _, v = np.linalg.eigh(T.T @ T)
+    return v[:, 0]
+
+
+def normal_curvature(frame: CurveFrame, normal: np.ndarray) -> float:
+    """Normal curvature along a curve's tangent: -kappa (N_c . N), Meusnier's theorem.
+
+    The thesis writes kappa (N_c . N) with N on the side the curve bends towards; with the
+    outward normal the sign flips so that convex surfaces have positive curvature.
+    """
+    return float(-frame.curvature * (frame.normal @ normal))
+
+
+def principal_curvatures_thesis(kn_alpha, kn_beta, kn_gamma, theta1, theta2):
+    """k1, k2 and theta from three normal curvatures, thesis Eqs. (4.2)-(4.6).
+
+    ``theta1``, ``theta2`` are the angles from T_alpha to T_beta and T_gamma in the
+    tangent plane; theta is the angle from T_alpha to the first principal direction.
+    Returns ``(k1, k2, theta)`` in the thesis's order (k1 is the curvature along theta,
+    not necessarily the larger one).
+    """
+    ratio = ((kn_alpha - kn_beta) * np.sin(theta2)) / ((kn_alpha - kn_gamma) * np.sin(theta1))
+    theta = (np.arctan(np.sin(theta1 - theta2) / (ratio - np.cos(theta1 - theta2))) - theta2) / 2
+    c0, s0 = np.cos(theta) ** 2, np.sin(theta) ** 2
+    c1, s1 = np.cos(theta + theta1) ** 2, np.sin(theta + theta1) ** 2
+    denom = c0 * s1 - c1 * s0
+    k1 = (kn_alpha * s1 - kn_beta * s0) / denom
+    k2 = (kn_beta * c0 - kn_alpha * c1) / denom
+    return float(k1), float(k2), float(theta)
+
+
+def principal_curvatures_from_normal_curvatures(normal_curvatures, angles):
+    """Second fundamental form from k >= 3 normal curvatures by least squares (Euler).
+
+    ``kn_i = L cos^2(a_i) + 2 M sin(a_i) cos(a_i) + N sin^2(a_i)`` for tangent directions
+    at angles ``a_i`` in the tangent plane. With three curves this is the exact solve of
+    (4.2)-(4.4); with more it is their least-squares solution.
+
+    Returns
+    -------
+    k1, k2 : float
+        Eigenvalues of [[L, M], [M, N]], k1 >= k2.
+    angle1 : float
+        Angle of the k1 direction.
+    condition : float
+        Condition number of the linear system (large: directions too close together).
+    """
+    a = np.asarray(angles, dtype=float)
+    A = np.column_stack([np.cos(a) ** 2, 2 * np.sin(a) * np.cos(a), np.sin(a) ** 2])
+    (L, M, N), *_ = np.linalg.lstsq(A, np.asarray(normal_curvatures, float), rcond=None)
+    w, v = np.linalg.eigh(np.array([[L, M], [M, N]]))
+    condition = float(np.linalg.cond(A))
+    return float(w[1]), float(w[0]), float(np.arctan2(v[1, 1], v[0, 1])), condition
+
+
+def local_surface_geometry(
+    curves: DataCurves,
+    *,
+    half_length_m: float = FIT_HALF_LENGTH_M,
+    degree: int = FIT_DEGREE,
+) -> LocalSurfaceGeometry:
+    """Normal (4.1) and principal curvatures (4.2)-(4.6) at the curves' common point.
+
+    With ``curves.approach`` the normal points against the approach (out of the object);
+    otherwise it is oriented so that the mean normal curvature is positive (the data are
+    taken as seen from outside a locally convex surface) and ``oriented`` is False.
+    """
+    p = curves.intersection
+    frames = tuple(
+        curve_frame_at(c, p, half_length_m=half_length_m, degree=degree) for c in curves.curves
+    )
+    tangents = np.array([f.tangent for f in frames])
+    normal = surface_normal(tangents)
+    oriented = curves.approach is not None
+    if oriented:
+        normal = -normal if normal @ curves.approach > 0 else normal
+    kn = np.array([normal_curvature(f, normal) for f in frames])
+    if not oriented and kn.mean() < 0:
+        normal, kn = -normal, -kn
+    # tangent-plane basis: e1 along the first curve's projected tangent
+    e1 = tangents[0] - normal * (tangents[0] @ normal)
+    e1 /= np.linalg.norm(e1)
+    e2 = np.cross(normal, e1)
+    angles = np.arctan2(tangents @ e2, tangents @ e1)
+    if np.min(np.abs(np.sin(angles[:, None] - angles[None, :])) + np.eye(len(angles))) < 1e-3:
+        raise DegenerateGeometry("two data curves have the same tangent direction at p")
+    k1, k2, angle1, _ = principal_curvatures_from_normal_curvatures(kn, angles)
+    d1 = np.cos(angle1) * e1 + np.sin(angle1) * e2
+    d2 = np.cross(normal, d1)
+    return LocalSurfaceGeometry(p, normal, k1, k2, d1, d2, frames, kn, oriented)

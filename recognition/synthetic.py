@@ -1,0 +1,359 @@
+"""Synthetic data curves: sampling planes through a surface point (thesis 4.2.3, 4.3.4).
+
+Three planes containing the surface normal at p, ``plane_angle`` apart (or any given
+planes through p), are intersected with a surface: a triangle mesh (exact plane-mesh
+section) or an implicit surface ``f = 0`` (traced by predictor-corrector steps). Each
+section is resampled at equal arc-length spacing with p as its middle point, noise is
+added, and the curves are moved to an unknown data frame by a random rigid motion. The
+ground truth is kept apart.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+import trimesh
+from scipy.spatial import cKDTree
+from scipy.spatial.transform import Rotation
+
+from recognition.errors import DegenerateGeometry, InvalidCurveData
+from recognition.surfaces.data_curves import DataCurves
+
+__all__ = [
+    "ImplicitSurface",
+    "SyntheticCurves",
+    "implicit_data_curves",
+    "mesh_data_curves",
+    "mesh_plane_section",
+    "random_rigid_transform",
+    "resample_around",
+    "sampling_plane_normals",
+]
+
+
+class ImplicitSurface(Protocol):
+    """What :func:`implicit_data_curves` needs of a closed-form surface."""
+
+    def implicit(self, points: np.ndarray) -> np.ndarray:
+        """f(x) at (n, 3) points; the surface is f = 0."""
+
+    def gradient(self, points: np.ndarray) -> np.ndarray:
+        """(n, 3) gradient of f."""
+
+
+@dataclass(frozen=True)
+class SyntheticCurves:
+    """Data curves with their ground truth.
+
+    Attributes
+    ----------
+    curves : DataCurves
+        Noisy curves in the data frame, with the approach direction.
+    point_in_model : (3,) float
+        The true common point p on the model.
+    normal_in_model : (3,) float
+        The model's outward unit normal at p.
+    T_model_from_data : (4, 4) float
+        The rigid motion from the data frame to the model frame.
+    clean_curves_in_model : tuple of (n_i, 3) float
+        The noise-free samples, model frame.
+    plane_normals_in_model : (k, 3) float
+        Normals of the sampling planes, model frame.
+    """
+
+    curves: DataCurves
+    point_in_model: np.ndarray
+    normal_in_model: np.ndarray
+    T_model_from_data: np.ndarray
+    clean_curves_in_model: tuple[np.ndarray, ...]
+    plane_normals_in_model: np.ndarray
+
+
+def random_rigid_transform(rng: np.random.Generator, translation_scale_m: float = 0.1):
+    """A uniformly random rotation and a Gaussian translation, as a 4x4 matrix."""
+    T = np.eye(4)
+    T[:3, :3] = Rotation.random(random_state=rng).as_matrix()
+    T[:3, 3] = rng.normal(scale=translation_scale_m, size=3)
+    return T
+
+
+def _unit(v):
+    v = np.asarray(v, dtype=float)
+    n = np.linalg.norm(v)
+    if not n > 0:
+        raise InvalidCurveData(f"expected a non-zero vector, got {v}")
+    return v / n
+
+
+def sampling_plane_normals(
+    normal, first_direction=None, plane_angle_rad: float = np.pi / 3, count: int = 3
+) -> np.ndarray:
+    """Normals of ``count`` planes that contain ``normal``, ``plane_angle_rad`` apart.
+
+    The first plane contains ``first_direction`` (any tangent if omitted); plane k is
+    the first rotated by ``k * plane_angle_rad`` about the surface normal.
+    """
+    n = _unit(normal)
+    if first_direction is None:
+        first_direction = np.eye(3)[np.argmin(np.abs(n))]
+    t = np.asarray(first_direction, float) - n * (np.asarray(first_direction, float) @ n)
+    t = _unit(t)
+    b = np.cross(n, t)
+    angles = plane_angle_rad * np.arange(count)
+    directions = np.cos(angles)[:, None] * t + np.sin(angles)[:, None] * b
+    return np.cross(directions, n)  # plane normal = in-plane tangent x surface normal
+
+
+def resample_around(polyline: np.ndarray, point: np.ndarray, n_points: int, spacing: float):
+    """``n_points`` at arc-length ``spacing`` along a polyline, ``point`` in the middle.
+
+    The polyline is ordered; ``point`` is projected onto it. Raises
+    :class:`DegenerateGeometry` when the polyline ends before the samples do.
+    """
+    seg = np.diff(polyline, axis=0)
+    seg_len = np.linalg.norm(seg, axis=1)
+    s_nodes = np.concatenate([[0.0], np.cumsum(seg_len)])
+    # projection of point onto every segment
+    w = np.clip(
+        np.einsum("ij,ij->i", point - polyline[:-1], seg) / np.maximum(seg_len**2, 1e-300), 0, 1
+    )
+    proj = polyline[:-1] + w[:, None] * seg
+    k = int(np.argmin(np.linalg.norm(proj - point, axis=1)))
+    s0 = s_nodes[k] + w[k] * seg_len[k]
+    half = (n_points - 1) / 2.0
+    s = s0 + spacing * (np.arange(n_points) - half)
+    if s[0] < -1e-12 or s[-1] > s_nodes[-1] + 1e-12:
+        raise DegenerateGeometry(
+            f"the section through p is too short: {n_points} points at {spacing * 1e3:.3g} mm "
+            f"need {spacing * (n_points - 1) * 1e3:.3g} mm centred on p, the section offers "
+            f"{s0 * 1e3:.3g} mm before and {(s_nodes[-1] - s0) * 1e3:.3g} mm after"
+        )
+    return np.column_stack([np.interp(s, s_nodes, polyline[:, i]) for i in range(3)])
+
+
+def _chain_segments(segments: np.ndarray, start: np.ndarray, merge_tol: float) -> np.ndarray:
+    """Order the plane-section segments of the component nearest ``start`` into a polyline."""
+    ends = segments.reshape(-1, 3)
+    tree = cKDTree(ends)
+    # merge coincident endpoints (each section vertex is shared by two faces)
+    label = np.arange(len(ends))
+    for i, j in sorted(tree.query_pairs(merge_tol)):
+        label[j] = label[i]
+    for i in range(len(label)):  # path compression
+        while label[label[i]] != label[i]:
+            label[i] = label[label[i]]
+        label[i] = label[label[i]]
+    _, node = np.unique(label, return_inverse=True)
+    node = node.reshape(-1, 2)
+    n_nodes = node.max() + 1
+    position = np.zeros((n_nodes, 3))
+    position[node.ravel()] = ends
+    adjacency: list[list[int]] = [[] for _ in range(n_nodes)]
+    for a, b in node:
+        if a != b:
+            adjacency[a].append(b)
+            adjacency[b].append(a)
+    # the segment nearest start, walked both ways
+    mid = 0.5 * (segments[:, 0] + segments[:, 1])
+    s0 = int(np.argmin(np.linalg.norm(mid - start, axis=1)))
+    a, b = node[s0]
+
+    def walk(prev, cur):
+        path = [cur]
+        seen = {prev, cur}
+        while True:
+            nxt = [v for v in adjacency[cur] if v not in seen]
+            if not nxt:
+                return path, False
+            prev, cur = cur, nxt[0]
+            if cur in seen:
+                return path, True
+            seen.add(cur)
+            path.append(cur)
+
+    forward, _ = walk(a, b)
+    backward, _ = walk(b, a)
+    order = backward[::-1] + forward
+    # a closed loop walked both ways meets itself: keep each node once
+    _, first = np.unique(order, return_index=True)
+    order = [order[i] for i in sorted(first)]
+    return position[order]
+
+
+def mesh_plane_section(
+    mesh: trimesh.Trimesh, point: np.ndarray, plane_normal: np.ndarray, radius: float | None = None
+) -> np.ndarray:
+    """The connected plane section of ``mesh`` through ``point``, as an ordered polyline.
+
+    Only faces within ``radius`` of ``point`` are intersected when given (a closed
+    section is then cut into an open arc through the point).
+    """
+    faces = None
+    if radius is not None:
+        d = np.linalg.norm(mesh.triangles_center - point, axis=1)
+        faces = np.flatnonzero(d <= radius + mesh.edges_unique_length.max())
+    segments = trimesh.intersections.mesh_plane(
+        mesh, plane_normal, point, return_faces=False, local_faces=faces
+    )
+    if len(segments) == 0:
+        raise DegenerateGeometry("the sampling plane does not cut the mesh near p")
+    scale = float(np.median(np.linalg.norm(segments[:, 1] - segments[:, 0], axis=1)))
+    return _chain_segments(np.asarray(segments), point, merge_tol=max(1e-6 * scale, 1e-12))
+
+
+def _finish(
+    clean_in_model, point, normal, planes, noise_std_m, rng, transform, translation_scale_m
+) -> SyntheticCurves:
+    if noise_std_m > 0 and rng is None:
+        raise InvalidCurveData("noise_std_m > 0 needs an explicit numpy.random.Generator")
+    T_data_from_model = random_rigid_transform(rng, translation_scale_m) if transform else np.eye(4)
+    if transform and rng is None:
+        raise InvalidCurveData("a random transform needs an explicit numpy.random.Generator")
+    noisy = [
+        c + (rng.normal(scale=noise_std_m, size=c.shape) if noise_std_m > 0 else 0.0)
+        for c in clean_in_model
+    ]
+    R, t = T_data_from_model[:3, :3], T_data_from_model[:3, 3]
+    data = DataCurves(tuple(c @ R.T + t for c in noisy), approach=-(R @ normal))
+    return SyntheticCurves(
+        data,
+        np.asarray(point, float),
+        np.asarray(normal, float),
+        np.linalg.inv(T_data_from_model),
+        tuple(clean_in_model),
+        np.asarray(planes, float),
+    )
+
+
+def mesh_data_curves(
+    mesh: trimesh.Trimesh,
+    point,
+    *,
+    normal=None,
+    n_points: int = 81,
+    spacing_m: float = 0.3e-3,
+    plane_angle_deg: float = 60.0,
+    first_direction=None,
+    plane_normals=None,
+    noise_std_m: float = 0.02e-3,
+    rng: np.random.Generator | None = None,
+    transform: bool = True,
+    translation_scale_m: float = 0.1,
+) -> SyntheticCurves:
+    """Three data curves through ``point`` on a triangle mesh (thesis Section 4.3.4).
+
+    Parameters
+    ----------
+    mesh : trimesh.Trimesh
+        Watertight model in metres.
+    point : (3,) float or int
+        A point on the surface, or a vertex index.
+    normal : (3,) float, optional
+        Outward normal at ``point`` (default: the area-weighted vertex normal (4.13) of the
+        nearest vertex).
+    n_points, spacing_m
+        Points per curve and their arc-length spacing (p is the middle point).
+    plane_angle_deg : float
+        Angle between consecutive sampling planes, which all contain the normal.
+    first_direction : (3,) float, optional
+        A tangent direction in the first plane (random if ``rng`` is given).
+    plane_normals : (k, 3) float, optional
+        Arbitrary sampling planes through ``point`` instead.
+    noise_std_m : float
+        Isotropic Gaussian noise per coordinate.
+    rng : numpy.random.Generator
+        Needed for noise, a random first direction and the random transform.
+    transform : bool
+        Move the curves to a random data frame.
+    """
+    if np.ndim(point) == 0:
+        vertex = int(point)
+        point = mesh.vertices[vertex]
+    else:
+        point = np.asarray(point, float)
+        vertex = int(mesh.kdtree.query(point)[1])
+    if normal is None:
+        normal = mesh.vertex_normals[vertex]
+    normal = _unit(normal)
+    if plane_normals is None:
+        if first_direction is None and rng is not None:
+            first_direction = rng.normal(size=3)
+        plane_normals = sampling_plane_normals(normal, first_direction, np.deg2rad(plane_angle_deg))
+    radius = 0.75 * spacing_m * (n_points - 1) + 5e-3
+    clean = []
+    for m in plane_normals:
+        polyline = mesh_plane_section(mesh, point, _unit(m), radius=radius)
+        clean.append(resample_around(polyline, point, n_points, spacing_m))
+    return _finish(
+        clean, point, normal, plane_normals, noise_std_m, rng, transform, translation_scale_m
+    )
+
+
+def _trace_implicit(surface, point, plane_normal, length, step):
+    """Points of {f = 0} ∩ plane from ``point`` over arc ``length`` (predictor-corrector)."""
+
+    def project(q):
+        for _ in range(20):
+            g = surface.gradient(q[None])[0]
+            g = g - plane_normal * (g @ plane_normal)
+            f = surface.implicit(q[None])[0]
+            dq = f * g / (g @ g)
+            q = q - dq
+            if np.linalg.norm(dq) < 1e-14 * max(1.0, np.linalg.norm(q)):
+                break
+        return q
+
+    branches = []
+    for sign in (1.0, -1.0):
+        q = project(np.asarray(point, float))
+        pts = [q]
+        travelled = 0.0
+        while travelled < length:
+            g = surface.gradient(q[None])[0]
+            t = np.cross(plane_normal, g)
+            t = sign * t / np.linalg.norm(t)
+            q_new = project(q + step * t)
+            travelled += np.linalg.norm(q_new - q)
+            pts.append(q_new)
+            q = q_new
+        branches.append(np.array(pts))
+    return np.concatenate([branches[1][::-1], branches[0][1:]])
+
+
+def implicit_data_curves(
+    surface: ImplicitSurface,
+    point,
+    *,
+    n_points: int = 61,
+    spacing: float = 0.01,
+    plane_angle_deg: float = 60.0,
+    first_direction=None,
+    plane_normals=None,
+    noise_std: float = 0.0,
+    rng: np.random.Generator | None = None,
+    transform: bool = True,
+    translation_scale: float = 0.1,
+) -> SyntheticCurves:
+    """Data curves through ``point`` on an implicit surface ``f = 0`` (thesis Section 4.2.3).
+
+    Same parameters as :func:`mesh_data_curves` (in the surface's units); the outward
+    normal is the normalised gradient of f at ``point``. The curves are traced with steps
+    of ``spacing / 8`` and resampled at ``spacing``.
+    """
+    point = np.asarray(point, float)
+    normal = _unit(surface.gradient(point[None])[0])
+    if plane_normals is None:
+        if first_direction is None and rng is not None:
+            first_direction = rng.normal(size=3)
+        plane_normals = sampling_plane_normals(normal, first_direction, np.deg2rad(plane_angle_deg))
+    half = spacing * (n_points - 1) / 2.0
+    clean = []
+    for m in plane_normals:
+        m = _unit(m)
+        polyline = _trace_implicit(surface, point, m, 1.05 * half + spacing, spacing / 8.0)
+        clean.append(resample_around(polyline, point, n_points, spacing))
+    return _finish(
+        clean, point, normal, plane_normals, noise_std, rng, transform, translation_scale
+    )
