@@ -1,0 +1,37 @@
+"""Exceptions raised by the simulator."""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+
+__all__ = [
+    "AssetError",
+    "InvalidMesh",
+    "SimulationError",
+    "UnknownObject",
+]
+
+
+class SimulationError(Exception):
+    """Base class of every error the simulator raises on purpose."""
+
+
+class UnknownObject(SimulationError, KeyError):
+    """An object name that is not in the catalog; the message lists the known names."""
+
+    def __init__(self, name: str, known: Iterable[str]) -> None:
+        self.name = name
+        self.known = tuple(known)
+        super().__init__(f"unknown object {name!r}; known objects: {', '.join(self.known)}")
+
+    def __str__(self) -> str:
+        # KeyError would print the message quoted; show it as written.
+        return str(self.args[0])
+
+
+class InvalidMesh(SimulationError, ValueError):
+    """A generated or loaded mesh is not a closed, single-component, consistently wound surface."""
+
+
+class AssetError(SimulationError, OSError):
+    """An asset file (object recipe, generated cache) is missing, malformed or unreadable."""

@@ -1,0 +1,132 @@
+"""Asset locations and the content-keyed, atomically written cache of generated assets.
+
+Recipes are read from ``<repo>/assets/objects/``. Generated assets go under
+``<repo>/assets/generated/``, or under the directory named by the environment variable
+``TACTILE_ASSETS_DIR`` when it is set (read on every call). The generated directory
+holds a ``.gitignore`` that ignores everything in it.
+
+Every cache file is named after the hash of everything it was made from, written to a
+temporary file in the same directory and moved into place with ``os.replace``, and
+carries a checksum of its arrays: a file that is missing, unreadable, corrupt or made
+from other inputs is rebuilt, never trusted.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import hashlib
+import json
+import os
+import tempfile
+import zipfile
+import zlib
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+__all__ = [
+    "ENV_ASSETS_DIR",
+    "array_checksum",
+    "build_lock",
+    "generated_dir",
+    "read_npz",
+    "recipes_dir",
+    "write_npz_atomic",
+]
+
+#: Environment variable overriding the generated-assets directory.
+ENV_ASSETS_DIR = "TACTILE_ASSETS_DIR"
+
+_REPO_ASSETS = Path(__file__).resolve().parents[2] / "assets"
+
+
+def recipes_dir() -> Path:
+    """Directory of the object recipe JSON files."""
+    return _REPO_ASSETS / "objects"
+
+
+def generated_dir(kind: str) -> Path:
+    """Directory for generated assets of one kind (e.g. ``"objects"``), created if missing."""
+    override = os.environ.get(ENV_ASSETS_DIR)
+    root = Path(override).expanduser() if override else _REPO_ASSETS / "generated"
+    path = root / kind
+    path.mkdir(parents=True, exist_ok=True)
+    ignore = root / ".gitignore"
+    if not ignore.exists():
+        with contextlib.suppress(OSError):
+            ignore.write_text("# Generated assets: rebuilt on demand, never committed.\n*\n")
+    return path
+
+
+def array_checksum(arrays: dict[str, np.ndarray]) -> str:
+    """Hex SHA-256 of the named arrays' dtypes, shapes and bytes, in name order."""
+    digest = hashlib.sha256()
+    for name in sorted(arrays):
+        array = np.ascontiguousarray(arrays[name])
+        digest.update(f"{name}:{array.dtype.str}:{array.shape};".encode())
+        digest.update(array.tobytes())
+    return digest.hexdigest()
+
+
+def write_npz_atomic(path: Path, arrays: dict[str, np.ndarray], meta: dict[str, Any]) -> None:
+    """Write arrays and a JSON metadata dict (plus the arrays' checksum) to ``path`` atomically.
+
+    Parameters
+    ----------
+    path : Path
+        Destination ``.npz`` file.
+    arrays : dict of str to ndarray
+        Numeric arrays (no object dtype).
+    meta : dict
+        JSON-serialisable metadata, stored as the string array ``meta``.
+    """
+    meta = {**meta, "checksum": array_checksum(arrays)}
+    payload = {**arrays, "meta": np.array(json.dumps(meta, sort_keys=True))}
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}-", suffix=".npz.tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "wb") as handle:
+            np.savez_compressed(handle, **payload)
+        os.chmod(tmp, 0o644)
+        os.replace(tmp, path)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        raise
+
+
+def read_npz(path: Path, names: tuple[str, ...]) -> tuple[dict[str, np.ndarray], dict] | None:
+    """Arrays ``names`` and the metadata of a cache file; None if missing or corrupt.
+
+    A file whose arrays do not match the checksum stored with them counts as corrupt.
+    """
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            arrays = {name: data[name] for name in names}
+            meta = json.loads(str(data["meta"]))
+    except (OSError, KeyError, ValueError, EOFError, zipfile.BadZipFile, zlib.error):
+        return None
+    if not isinstance(meta, dict) or meta.get("checksum") != array_checksum(arrays):
+        return None
+    return arrays, meta
+
+
+@contextlib.contextmanager
+def build_lock(path: Path) -> Iterator[None]:
+    """Hold an exclusive lock on ``path`` (a lock file) while building what it guards.
+
+    Parallel processes (e.g. test workers) that need the same asset then build it once;
+    the others wait and read the cache. Without ``fcntl`` (Windows) this does nothing.
+    """
+    try:
+        import fcntl
+    except ImportError:
+        yield
+        return
+    with open(path, "a") as handle:
+        fcntl.flock(handle, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(handle, fcntl.LOCK_UN)
