@@ -3,6 +3,7 @@
 __all__ = [
     "DegenerateGeometry",
     "InvalidCurveData",
+    "InvalidModel",
     "NoRealSolution",
     "RecognitionError",
 ]
@@ -22,3 +23,7 @@ class DegenerateGeometry(RecognitionError, ValueError):
 
 class NoRealSolution(RecognitionError, ArithmeticError):
     """An equation the method relies on (e.g. the slope quartic (3.31)) has no real root."""
+
+
+class InvalidModel(RecognitionError, ValueError):
+    """A model mesh that cannot be used: open, several components, implausible size."""

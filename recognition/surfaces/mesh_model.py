@@ -1,0 +1,447 @@
+"""Triangle-mesh models (thesis Section 4.3): normals, adaptive sampling, curvature table.
+
+A :class:`MeshModel` holds a validated mesh (metres), its vertex normals (4.13), the
+lookup table of principal curvatures at adaptively sampled vertices (4.3.2) and, built
+on first use, a narrow-band signed distance field and exact point-to-mesh distances for
+registration.
+
+Conventions as in :mod:`recognition.surfaces.local_geometry`: normals point out of the
+object, convex regions have positive curvature, k1 >= k2.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.sparse as sp
+import trimesh
+from scipy.spatial import cKDTree
+
+from recognition.errors import InvalidModel
+from recognition.surfaces.distance import DistanceField, MeshDistance
+
+__all__ = [
+    "CurvatureTable",
+    "MeshModel",
+    "MeshModelConfig",
+    "adaptive_sample",
+    "mesh_hash",
+    "paraboloid_curvatures",
+    "validate_mesh",
+    "vertex_normals",
+]
+
+#: Largest plausible bounding-box diagonal of a model in metres (a mm mesh read as m
+#: is 1000 times too large).
+MAX_DIAGONAL_M = 2.0
+#: Smallest plausible bounding-box diagonal in metres.
+MIN_DIAGONAL_M = 5.0e-3
+
+
+@dataclass(frozen=True)
+class MeshModelConfig:
+    """Settings of the lookup table (thesis Section 4.3.2).
+
+    Attributes
+    ----------
+    sample_angle_rad : float
+        theta: largest angle between the normal at a sample and the normals of the
+        triangles of its neighbourhood (thesis: pi/8).
+    max_ring, min_ring : int
+        Ring sizes of the neighbourhood, shrunk from max to min (thesis: 6 and 2).
+    marked_fraction : float
+        Sampling stops when this fraction of vertices is marked (thesis: 1/2).
+    fit_sizes : tuple of int
+        Neighbourhood sizes of the paraboloid fits (4.14) (thesis: 30..70).
+    seed : int
+        Seed of the random visiting order.
+    voxel_m, band_m : float
+        Voxel size and half width of the narrow-band distance field.
+    """
+
+    sample_angle_rad: float = np.pi / 8
+    max_ring: int = 6
+    min_ring: int = 2
+    marked_fraction: float = 0.5
+    fit_sizes: tuple[int, ...] = (30, 40, 50, 60, 70)
+    seed: int = 0
+    voxel_m: float = 0.75e-3
+    band_m: float = 3.0e-3
+
+
+def mesh_hash(vertices: np.ndarray, faces: np.ndarray) -> str:
+    """SHA-256 of the vertex and face arrays (float64 / int64, C order)."""
+    h = hashlib.sha256()
+    h.update(np.ascontiguousarray(vertices, dtype=np.float64).tobytes())
+    h.update(np.ascontiguousarray(faces, dtype=np.int64).tobytes())
+    return h.hexdigest()
+
+
+def validate_mesh(mesh: trimesh.Trimesh, name: str = "mesh") -> trimesh.Trimesh:
+    """A clean copy of ``mesh`` or an :class:`~recognition.errors.InvalidModel` error.
+
+    Unreferenced vertices are dropped; an open mesh has its duplicated vertices merged
+    and small holes filled; zero-area triangles are removed where the surface stays
+    closed. A mesh that is still open, has several components, or whose size is
+    implausible for metres (e.g. millimetres read as metres) is refused with a message
+    that names the problem.
+    """
+    if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
+        raise InvalidModel(f"{name}: expected a non-empty triangle mesh")
+    m = trimesh.Trimesh(np.asarray(mesh.vertices, float), np.asarray(mesh.faces), process=False)
+    if not np.all(np.isfinite(m.vertices)):
+        raise InvalidModel(f"{name}: vertices contain NaN or infinity")
+    m.remove_unreferenced_vertices()
+    if not m.is_watertight:  # duplicated vertices along seams: merge them, then fill holes
+        m.merge_vertices()
+        m.update_faces(m.unique_faces())
+        trimesh.repair.fill_holes(m)
+    degenerate = ~m.nondegenerate_faces(height=1e-12)
+    if degenerate.any():
+        # zero-area triangles have no normal; dropping them is safe only if the surface
+        # stays closed (otherwise they are kept: they do not change distances or (4.13))
+        trial = m.copy()
+        trial.update_faces(~degenerate)
+        trial.remove_unreferenced_vertices()
+        if trial.is_watertight or not m.is_watertight:
+            m = trial
+    diagonal = float(np.linalg.norm(m.extents))
+    if diagonal > MAX_DIAGONAL_M:
+        raise InvalidModel(
+            f"{name}: bounding box diagonal is {diagonal:.3g} m; expected an object of "
+            f"{MIN_DIAGONAL_M * 1e3:.0f} mm to {MAX_DIAGONAL_M:.0f} m. It looks like a "
+            "mesh in millimetres read as metres: scale it by 1e-3 (units='mm')"
+        )
+    if diagonal < MIN_DIAGONAL_M:
+        raise InvalidModel(
+            f"{name}: bounding box diagonal is {diagonal * 1e3:.3g} mm; expected at least "
+            f"{MIN_DIAGONAL_M * 1e3:.0f} mm. Is the mesh in kilometres or already scaled twice?"
+        )
+    components = m.split(only_watertight=False)
+    if len(components) > 1:
+        sizes = sorted((len(c.faces) for c in components), reverse=True)
+        raise InvalidModel(
+            f"{name}: has {len(components)} separate components (faces: "
+            f"{', '.join(map(str, sizes[:5]))}{', ...' if len(sizes) > 5 else ''}); "
+            "expected one closed surface"
+        )
+    if not m.is_watertight:
+        raise InvalidModel(
+            f"{name}: the surface has holes that could not be filled; expected a closed "
+            "(watertight) surface"
+        )
+    if not m.is_winding_consistent:
+        trimesh.repair.fix_winding(m)
+    if m.volume < 0:
+        m.invert()
+    return m
+
+
+def vertex_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """Unit vertex normals: the normalised sum of the incident triangles' unit normals (4.13)."""
+    tri = vertices[faces]
+    fn = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    fn /= np.maximum(np.linalg.norm(fn, axis=1, keepdims=True), 1e-300)
+    n = np.zeros_like(vertices)
+    for k in range(3):
+        np.add.at(n, faces[:, k], fn)
+    return n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
+
+
+def _face_normals(vertices, faces):
+    tri = vertices[faces]
+    fn = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    return fn / np.maximum(np.linalg.norm(fn, axis=1, keepdims=True), 1e-300)
+
+
+def _adjacency(n_vertices: int, faces: np.ndarray):
+    """Vertex adjacency (CSR) and vertex-to-face incidence (CSR)."""
+    e = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
+    A = sp.coo_matrix((np.ones(len(e), bool), (e[:, 0], e[:, 1])), (n_vertices,) * 2)
+    A = (A + A.T).tocsr()
+    rows = faces.ravel()
+    cols = np.repeat(np.arange(len(faces)), 3)
+    VF = sp.csr_matrix((np.ones(len(rows), bool), (rows, cols)), (n_vertices, len(faces)))
+    return A, VF
+
+
+def _gather(indptr: np.ndarray, indices: np.ndarray, rows: np.ndarray) -> np.ndarray:
+    """Concatenated CSR rows ``rows`` (the column indices), without a Python loop."""
+    starts = indptr[rows]
+    counts = indptr[rows + 1] - starts
+    total = int(counts.sum())
+    if total == 0:
+        return indices[:0]
+    offsets = np.repeat(starts - np.concatenate([[0], np.cumsum(counts)[:-1]]), counts)
+    return indices[offsets + np.arange(total)]
+
+
+def adaptive_sample(
+    vertices: np.ndarray,
+    faces: np.ndarray,
+    normals: np.ndarray,
+    config: MeshModelConfig = MeshModelConfig(),
+) -> np.ndarray:
+    """Vertices sampled densely where the normal turns fast (thesis Section 4.3.2.1).
+
+    Vertices are visited in a seeded random order. For an unmarked vertex v the ring
+    size of its neighbourhood N starts at ``max_ring`` and shrinks while some triangle
+    in N has a normal more than ``sample_angle_rad`` from v's normal, down to
+    ``min_ring``. If no vertex of N is marked, v is sampled and N marked. Sampling stops
+    when ``marked_fraction`` of the vertices are marked (or every vertex was visited).
+    Rings come from the mesh's sparse adjacency matrix; since N always contains the
+    2-ring, a vertex with a marked vertex in its 2-ring is skipped at once.
+    """
+    n = len(vertices)
+    A, VF = _adjacency(n, faces)
+    R2 = ((A + sp.identity(n, dtype=bool, format="csr")) @ (A + sp.identity(n, dtype=bool))).tocsr()
+    fn = _face_normals(vertices, faces)
+    cos_theta = np.cos(config.sample_angle_rad)
+    marked = np.zeros(n, bool)
+    stamp = np.full(n, -1, np.int64)
+    n_marked, target = 0, config.marked_fraction * n
+    samples = []
+    order = np.random.default_rng(config.seed).permutation(n)
+    a_ptr, a_idx = A.indptr, A.indices
+    f_ptr, f_idx = VF.indptr, VF.indices
+    r_ptr, r_idx = R2.indptr, R2.indices
+    for it, v in enumerate(order):
+        if marked[v] or marked[r_idx[r_ptr[v] : r_ptr[v + 1]]].any():
+            continue
+        # grow rings layer by layer: the ring size is the last before a layer whose
+        # triangles turn more than theta from v's normal (at least min_ring); a marked
+        # vertex within that ring rejects v. Growth stops as soon as both are decided.
+        nv = normals[v]
+        layer = np.array([v])
+        stamp[v] = it
+        layers = [layer]
+        ring = None
+        rejected = False
+        for k in range(config.max_ring + 1):
+            if k > 0:
+                nb = _gather(a_ptr, a_idx, layer)
+                layer = np.unique(nb[stamp[nb] != it])
+                stamp[layer] = it
+                layers.append(layer)
+            if ring is None and np.min(fn[_gather(f_ptr, f_idx, layer)] @ nv, initial=1.0) < (
+                cos_theta
+            ):
+                ring = max(k - 1, config.min_ring)
+            if ring is not None and k > ring:
+                break
+            if marked[layer].any():
+                rejected = True
+                break
+            if ring is not None and k == ring:
+                break
+        if rejected:
+            continue
+        ring = config.max_ring if ring is None else ring
+        neighbourhood = np.concatenate(layers[: ring + 1])
+        marked[neighbourhood] = True
+        n_marked += neighbourhood.size
+        samples.append(v)
+        if n_marked >= target:
+            break
+    return np.array(samples, dtype=np.int64)
+
+
+def _tangent_basis(normals: np.ndarray):
+    """Two unit tangents per normal, (m, 3) each, right-handed with the normal."""
+    helper = np.where(np.abs(normals[:, [0]]) < 0.9, [[1.0, 0, 0]], [[0, 1.0, 0]])
+    e1 = np.cross(normals, helper)
+    e1 /= np.linalg.norm(e1, axis=1, keepdims=True)
+    return e1, np.cross(normals, e1)
+
+
+def paraboloid_curvatures(
+    vertices: np.ndarray,
+    normals: np.ndarray,
+    sample: np.ndarray,
+    fit_sizes=(30, 40, 50, 60, 70),
+    tree: cKDTree | None = None,
+):
+    """Principal curvatures at sampled vertices by paraboloid fits, thesis Eq. (4.14).
+
+    ``z = a x^2 + b x y + c y^2 + d x + e y + f`` is fitted in the local frame (two
+    tangents, the normal) over the ``s`` nearest vertices, for each ``s`` in
+    ``fit_sizes``; each fit gives principal curvatures in closed form (the shape operator
+    of the graph at the origin); k1 and k2 are the medians over the fits, chosen
+    independently (thesis). Neighbours whose normal faces away from the sample's (the
+    other side of a thin part) are left out.
+
+    Returns
+    -------
+    k1, k2 : (m,) float
+        Principal curvatures (1/m), k1 >= k2, convex positive.
+    d1 : (m, 3) float
+        Unit principal direction of k1 from the middle fit.
+    """
+    tree = tree or cKDTree(vertices)
+    kmax = max(fit_sizes)
+    query = min(2 * kmax, len(vertices))
+    _, nb = tree.query(vertices[sample], k=query)
+    n0 = normals[sample]
+    facing = np.einsum("mkj,mj->mk", normals[nb], n0) > 0.0
+    # keep the first kmax facing neighbours, in distance order
+    rank = np.cumsum(facing, axis=1)
+    keep = facing & (rank <= kmax)
+    pos = np.argsort(~keep, axis=1, kind="stable")[:, :kmax]
+    nb = np.take_along_axis(nb, pos, axis=1)
+    e1, e2 = _tangent_basis(n0)
+    rel = vertices[nb] - vertices[sample][:, None, :]
+    x = np.einsum("mkj,mj->mk", rel, e1)
+    y = np.einsum("mkj,mj->mk", rel, e2)
+    z = np.einsum("mkj,mj->mk", rel, n0)
+    scale = np.sqrt(np.mean(x**2 + y**2, axis=1, keepdims=True)) + 1e-300
+    xs, ys = x / scale, y / scale
+    D = np.stack([xs * xs, xs * ys, ys * ys, xs, ys, np.ones_like(xs)], axis=-1)
+    k1s, k2s, dirs = [], [], []
+    for s in fit_sizes:
+        Ds, zs = D[:, :s], z[:, :s]
+        G = np.einsum("mki,mkj->mij", Ds, Ds) + 1e-12 * np.eye(6)
+        coef = np.linalg.solve(G, np.einsum("mki,mk->mi", Ds, zs)[..., None])[..., 0]
+        sc = scale[:, 0]
+        a, b, c = coef[:, 0] / sc**2, coef[:, 1] / sc**2, coef[:, 2] / sc**2
+        d, e = coef[:, 3] / sc, coef[:, 4] / sc
+        w = np.sqrt(1 + d * d + e * e)
+        first = np.stack([np.stack([1 + d * d, d * e], -1), np.stack([d * e, 1 + e * e], -1)], -2)
+        second = np.stack([np.stack([2 * a, b], -1), np.stack([b, 2 * c], -1)], -2) / w[:, None, None]
+        # curvature positive where the surface bends away from +z (the outward normal)
+        S = -np.linalg.solve(first, second)
+        ev, evec = np.linalg.eig(S)
+        ev, evec = ev.real, evec.real
+        order = np.argsort(-ev, axis=1)
+        ev = np.take_along_axis(ev, order, axis=1)
+        v1 = np.take_along_axis(evec, order[:, None, :], axis=2)[:, :, 0]
+        k1s.append(ev[:, 0])
+        k2s.append(ev[:, 1])
+        t = v1[:, [0]] * e1 + v1[:, [1]] * e2 + (v1[:, [0]] * d[:, None] + v1[:, [1]] * e[:, None]) * n0
+        t -= n0 * np.einsum("mj,mj->m", t, n0)[:, None]
+        dirs.append(t / np.linalg.norm(t, axis=1, keepdims=True))
+    k1 = np.median(np.array(k1s), axis=0)
+    k2 = np.median(np.array(k2s), axis=0)
+    return np.maximum(k1, k2), np.minimum(k1, k2), dirs[len(fit_sizes) // 2]
+
+
+@dataclass(frozen=True)
+class CurvatureTable:
+    """Principal curvatures at sampled vertices with a (k1, k2) range query, Eq. (4.7).
+
+    Attributes
+    ----------
+    vertex : (m,) int
+        Sampled vertex indices.
+    k1, k2 : (m,) float
+        Principal curvatures, 1/m.
+    d1 : (m, 3) float
+        Principal direction of k1.
+    """
+
+    vertex: np.ndarray
+    k1: np.ndarray
+    k2: np.ndarray
+    d1: np.ndarray
+    _tree: cKDTree = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self):
+        object.__setattr__(self, "_tree", cKDTree(np.column_stack([self.k1, self.k2])))
+
+    def __len__(self) -> int:
+        return self.vertex.size
+
+    def query(self, k1: float, k2: float, delta: float) -> np.ndarray:
+        """Rows i with sqrt((k1 - k1_i)^2 + (k2 - k2_i)^2) < delta, thesis Eq. (4.7)."""
+        rows = self._tree.query_ball_point([k1, k2], r=delta)
+        return np.array(sorted(rows), dtype=np.int64)
+
+
+class MeshModel:
+    """A validated mesh with its curvature table and distance queries (built lazily).
+
+    Parameters
+    ----------
+    name : str
+    mesh : trimesh.Trimesh
+        Closed surface in metres; validated (and repaired where safe) on construction.
+    config : MeshModelConfig
+    table : CurvatureTable, optional
+        A table built earlier for the same mesh and config (e.g. loaded from a cache).
+    """
+
+    def __init__(
+        self,
+        name: str,
+        mesh: trimesh.Trimesh,
+        config: MeshModelConfig = MeshModelConfig(),
+        table: CurvatureTable | None = None,
+        distance_field: DistanceField | None = None,
+        validate: bool = True,
+    ):
+        self.name = name
+        self.config = config
+        self.mesh = validate_mesh(mesh, name) if validate else mesh
+        self.vertices = np.ascontiguousarray(self.mesh.vertices, dtype=np.float64)
+        self.faces = np.ascontiguousarray(self.mesh.faces, dtype=np.int64)
+        self.normals = vertex_normals(self.vertices, self.faces)
+        self.hash = mesh_hash(self.vertices, self.faces)
+        self._table = table
+        self._field = distance_field
+        self._distance = None
+        self._tree = None
+        self.timings: dict[str, float] = {}
+
+    @property
+    def tree(self) -> cKDTree:
+        """KD-tree of the vertices."""
+        if self._tree is None:
+            self._tree = cKDTree(self.vertices)
+        return self._tree
+
+    @property
+    def table(self) -> CurvatureTable:
+        """The lookup table (built on first use: adaptive sampling + paraboloid fits)."""
+        if self._table is None:
+            import time
+
+            start = time.perf_counter()
+            sample = adaptive_sample(self.vertices, self.faces, self.normals, self.config)
+            self.timings["sampling_s"] = time.perf_counter() - start
+            start = time.perf_counter()
+            k1, k2, d1 = paraboloid_curvatures(
+                self.vertices, self.normals, sample, self.config.fit_sizes, self.tree
+            )
+            self.timings["curvatures_s"] = time.perf_counter() - start
+            self._table = CurvatureTable(sample, k1, k2, d1)
+        return self._table
+
+    @property
+    def distance_field(self) -> DistanceField:
+        """Narrow-band signed distance grid (built on first use)."""
+        if self._field is None:
+            import time
+
+            start = time.perf_counter()
+            self._field = DistanceField.build(
+                self.vertices, self.normals, self.faces, self.config.voxel_m, self.config.band_m,
+                tree=self.tree,
+            )
+            self.timings["distance_field_s"] = time.perf_counter() - start
+        return self._field
+
+    @property
+    def distance(self) -> MeshDistance:
+        """Exact point-to-mesh distances."""
+        if self._distance is None:
+            self._distance = MeshDistance(self.vertices, self.faces, self.tree)
+        return self._distance
+
+    @property
+    def extent_m(self) -> float:
+        """Bounding-box diagonal, metres."""
+        return float(np.linalg.norm(self.vertices.max(0) - self.vertices.min(0)))
+
+    def __repr__(self) -> str:
+        return f"MeshModel({self.name!r}, {len(self.vertices)} vertices)"
