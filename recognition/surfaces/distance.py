@@ -69,7 +69,7 @@ class MeshDistance:
         Nearest vertices whose incident triangles are searched.
     """
 
-    def __init__(self, vertices, faces, tree: cKDTree | None = None, k: int = 8):
+    def __init__(self, vertices, faces, tree: cKDTree | None = None, k: int = 6):
         self.vertices = np.asarray(vertices, float)
         self.faces = np.asarray(faces, np.int64)
         self.tree = tree or cKDTree(self.vertices)
@@ -117,8 +117,9 @@ class MeshDistance:
     def signed(self, points: np.ndarray) -> np.ndarray:
         """Signed distance (positive outside), sign from the closest face's normal."""
         d, q, f = self.closest(points)
-        side = np.einsum("ij,ij->i", np.asarray(points, float).reshape(-1, 3) - q,
-                         self.face_normals[f])
+        side = np.einsum(
+            "ij,ij->i", np.asarray(points, float).reshape(-1, 3) - q, self.face_normals[f]
+        )
         return np.where(side < 0, -d, d)
 
 
@@ -144,8 +145,9 @@ class DistanceField:
     band: float
 
     @classmethod
-    def build(cls, vertices, normals, faces, voxel: float, band: float,
-              tree: cKDTree | None = None) -> DistanceField:
+    def build(
+        cls, vertices, normals, faces, voxel: float, band: float, tree: cKDTree | None = None
+    ) -> DistanceField:
         """Sample the signed distance in a band of half width ``band`` around the surface.
 
         In the band, the distance is the point-to-plane distance to the nearest vertex
@@ -171,10 +173,15 @@ class DistanceField:
         values = np.empty(shape, np.float32)
         values[in_band] = np.clip(d, -band, band)
         labels, _ = ndimage.label(~in_band)
-        boundary = np.unique(np.concatenate([
-            labels[[0, -1], :, :].ravel(), labels[:, [0, -1], :].ravel(),
-            labels[:, :, [0, -1]].ravel(),
-        ]))
+        boundary = np.unique(
+            np.concatenate(
+                [
+                    labels[[0, -1], :, :].ravel(),
+                    labels[:, [0, -1], :].ravel(),
+                    labels[:, :, [0, -1]].ravel(),
+                ]
+            )
+        )
         outside = np.isin(labels, boundary[boundary > 0])
         values[~in_band] = np.where(outside[~in_band], band, -band)
         return cls(origin, float(voxel), values, float(band))
@@ -186,6 +193,19 @@ class DistanceField:
         g = np.clip(g, 0, shape - 1 - 1e-9)
         i = np.floor(g).astype(np.int64)
         return i, g - i, outside
+
+    def nearest(self, points: np.ndarray) -> np.ndarray:
+        """Signed distance of the nearest voxel centre (no interpolation; +band off the grid).
+
+        Eight times cheaper than :meth:`__call__`, accurate to about half a voxel: for
+        screening many poses.
+        """
+        g = np.rint((np.asarray(points, float) - self.origin) / self.voxel).astype(np.int64)
+        shape = self.values.shape
+        inside = np.all((g >= 0) & (g < shape), axis=-1)
+        g = np.clip(g, 0, np.array(shape) - 1)
+        flat = (g[..., 0] * shape[1] + g[..., 1]) * shape[2] + g[..., 2]
+        return np.where(inside, self.values.ravel()[flat], self.band)
 
     def __call__(self, points: np.ndarray) -> np.ndarray:
         """Trilinearly interpolated signed distance at (..., 3) points (+band off the grid)."""
@@ -203,26 +223,45 @@ class DistanceField:
     def value_and_gradient(self, points: np.ndarray):
         """Interpolated signed distance (...,) and its gradient (..., 3)."""
         i, f, outside = self._cell(points)
-        v = self.values
-        x, y, z = i[..., 0], i[..., 1], i[..., 2]
-        fx, fy, fz = f[..., 0], f[..., 1], f[..., 2]
+        shape = self.values.shape
+        flat = (i[..., 0] * shape[1] + i[..., 1]) * shape[2] + i[..., 2]
+        v = self.values.ravel()
+        sy, sx = shape[2], shape[1] * shape[2]
         c = {
-            (a, b, e): v[x + a, y + b, z + e].astype(float)
-            for a in (0, 1) for b in (0, 1) for e in (0, 1)
+            (a, b, e): v[flat + a * sx + b * sy + e] for a in (0, 1) for b in (0, 1) for e in (0, 1)
         }
+        f = f.astype(np.float32)
+        fx, fy, fz = f[..., 0], f[..., 1], f[..., 2]
         gx, gy, gz = 1 - fx, 1 - fy, 1 - fz
         val = (
-            c[0, 0, 0] * gx * gy * gz + c[1, 0, 0] * fx * gy * gz + c[0, 1, 0] * gx * fy * gz
-            + c[1, 1, 0] * fx * fy * gz + c[0, 0, 1] * gx * gy * fz + c[1, 0, 1] * fx * gy * fz
-            + c[0, 1, 1] * gx * fy * fz + c[1, 1, 1] * fx * fy * fz
+            c[0, 0, 0] * gx * gy * gz
+            + c[1, 0, 0] * fx * gy * gz
+            + c[0, 1, 0] * gx * fy * gz
+            + c[1, 1, 0] * fx * fy * gz
+            + c[0, 0, 1] * gx * gy * fz
+            + c[1, 0, 1] * fx * gy * fz
+            + c[0, 1, 1] * gx * fy * fz
+            + c[1, 1, 1] * fx * fy * fz
         )
-        dx = ((c[1, 0, 0] - c[0, 0, 0]) * gy * gz + (c[1, 1, 0] - c[0, 1, 0]) * fy * gz
-              + (c[1, 0, 1] - c[0, 0, 1]) * gy * fz + (c[1, 1, 1] - c[0, 1, 1]) * fy * fz)
-        dy = ((c[0, 1, 0] - c[0, 0, 0]) * gx * gz + (c[1, 1, 0] - c[1, 0, 0]) * fx * gz
-              + (c[0, 1, 1] - c[0, 0, 1]) * gx * fz + (c[1, 1, 1] - c[1, 0, 1]) * fx * fz)
-        dz = ((c[0, 0, 1] - c[0, 0, 0]) * gx * gy + (c[1, 0, 1] - c[1, 0, 0]) * fx * gy
-              + (c[0, 1, 1] - c[0, 1, 0]) * gx * fy + (c[1, 1, 1] - c[1, 1, 0]) * fx * fy)
-        grad = np.stack([dx, dy, dz], axis=-1) / self.voxel
-        val = np.where(outside, self.band, val)
+        dx = (
+            (c[1, 0, 0] - c[0, 0, 0]) * gy * gz
+            + (c[1, 1, 0] - c[0, 1, 0]) * fy * gz
+            + (c[1, 0, 1] - c[0, 0, 1]) * gy * fz
+            + (c[1, 1, 1] - c[0, 1, 1]) * fy * fz
+        )
+        dy = (
+            (c[0, 1, 0] - c[0, 0, 0]) * gx * gz
+            + (c[1, 1, 0] - c[1, 0, 0]) * fx * gz
+            + (c[0, 1, 1] - c[0, 0, 1]) * gx * fz
+            + (c[1, 1, 1] - c[1, 0, 1]) * fx * fz
+        )
+        dz = (
+            (c[0, 0, 1] - c[0, 0, 0]) * gx * gy
+            + (c[1, 0, 1] - c[1, 0, 0]) * fx * gy
+            + (c[0, 1, 1] - c[0, 1, 0]) * gx * fy
+            + (c[1, 1, 1] - c[1, 1, 0]) * fx * fy
+        )
+        grad = np.stack([dx, dy, dz], axis=-1).astype(float) / self.voxel
+        val = np.where(outside, self.band, val.astype(float))
         grad = np.where(outside[..., None], 0.0, grad)
         return val, grad

@@ -26,7 +26,7 @@ __all__ = [
 ]
 
 #: Default half length (metres) of the arc around p used by the curve fits.
-FIT_HALF_LENGTH_M = 6.0e-3
+FIT_HALF_LENGTH_M = 4.5e-3
 #: Default degree of the polynomial fitted to each data curve around p.
 FIT_DEGREE = 4
 

@@ -38,6 +38,10 @@ __all__ = [
 MAX_DIAGONAL_M = 2.0
 #: Smallest plausible bounding-box diagonal in metres.
 MIN_DIAGONAL_M = 5.0e-3
+#: Neighbours of the single paraboloid fit of the per-vertex curvature map.
+DENSE_FIT_SIZE = 50
+#: Cell size of the candidate pool drawn from the per-vertex curvature map.
+POOL_SPACING_M = 1.0e-3
 
 
 @dataclass(frozen=True)
@@ -308,7 +312,9 @@ def paraboloid_curvatures(
         d, e = coef[:, 3] / sc, coef[:, 4] / sc
         w = np.sqrt(1 + d * d + e * e)
         first = np.stack([np.stack([1 + d * d, d * e], -1), np.stack([d * e, 1 + e * e], -1)], -2)
-        second = np.stack([np.stack([2 * a, b], -1), np.stack([b, 2 * c], -1)], -2) / w[:, None, None]
+        second = (
+            np.stack([np.stack([2 * a, b], -1), np.stack([b, 2 * c], -1)], -2) / w[:, None, None]
+        )
         # curvature positive where the surface bends away from +z (the outward normal)
         S = -np.linalg.solve(first, second)
         ev, evec = np.linalg.eig(S)
@@ -318,7 +324,11 @@ def paraboloid_curvatures(
         v1 = np.take_along_axis(evec, order[:, None, :], axis=2)[:, :, 0]
         k1s.append(ev[:, 0])
         k2s.append(ev[:, 1])
-        t = v1[:, [0]] * e1 + v1[:, [1]] * e2 + (v1[:, [0]] * d[:, None] + v1[:, [1]] * e[:, None]) * n0
+        t = (
+            v1[:, [0]] * e1
+            + v1[:, [1]] * e2
+            + (v1[:, [0]] * d[:, None] + v1[:, [1]] * e[:, None]) * n0
+        )
         t -= n0 * np.einsum("mj,mj->m", t, n0)[:, None]
         dirs.append(t / np.linalg.norm(t, axis=1, keepdims=True))
     k1 = np.median(np.array(k1s), axis=0)
@@ -354,8 +364,8 @@ class CurvatureTable:
 
     def query(self, k1: float, k2: float, delta: float) -> np.ndarray:
         """Rows i with sqrt((k1 - k1_i)^2 + (k2 - k2_i)^2) < delta, thesis Eq. (4.7)."""
-        rows = self._tree.query_ball_point([k1, k2], r=delta)
-        return np.array(sorted(rows), dtype=np.int64)
+        rows = self._tree.query_ball_point([k1, k2], r=delta, return_sorted=False)
+        return np.sort(np.asarray(rows, dtype=np.int64))
 
 
 class MeshModel:
@@ -379,6 +389,7 @@ class MeshModel:
         table: CurvatureTable | None = None,
         distance_field: DistanceField | None = None,
         validate: bool = True,
+        vertex_curvatures: CurvatureTable | None = None,
     ):
         self.name = name
         self.config = config
@@ -388,9 +399,12 @@ class MeshModel:
         self.normals = vertex_normals(self.vertices, self.faces)
         self.hash = mesh_hash(self.vertices, self.faces)
         self._table = table
+        self._dense = vertex_curvatures
         self._field = distance_field
         self._distance = None
         self._tree = None
+        self._cell_keys: dict[float, np.ndarray] = {}
+        self._pools: dict[float, CurvatureTable] = {}
         self.timings: dict[str, float] = {}
 
     @property
@@ -418,6 +432,29 @@ class MeshModel:
         return self._table
 
     @property
+    def vertex_curvatures(self) -> CurvatureTable:
+        """Principal curvatures at every vertex (one paraboloid fit each; built on first use).
+
+        Not part of the thesis's method: the fast registration draws its candidates from
+        it (the thesis's table holds only the adaptively sampled vertices).
+        """
+        if self._dense is None:
+            import time
+
+            start = time.perf_counter()
+            every = np.arange(len(self.vertices))
+            parts = [
+                paraboloid_curvatures(
+                    self.vertices, self.normals, chunk, (DENSE_FIT_SIZE,), self.tree
+                )
+                for chunk in np.array_split(every, max(1, len(every) // 20000))
+            ]
+            k1, k2, d1 = (np.concatenate(x) for x in zip(*parts, strict=True))
+            self._dense = CurvatureTable(every, k1, k2, d1)
+            self.timings["vertex_curvatures_s"] = time.perf_counter() - start
+        return self._dense
+
+    @property
     def distance_field(self) -> DistanceField:
         """Narrow-band signed distance grid (built on first use)."""
         if self._field is None:
@@ -425,7 +462,11 @@ class MeshModel:
 
             start = time.perf_counter()
             self._field = DistanceField.build(
-                self.vertices, self.normals, self.faces, self.config.voxel_m, self.config.band_m,
+                self.vertices,
+                self.normals,
+                self.faces,
+                self.config.voxel_m,
+                self.config.band_m,
                 tree=self.tree,
             )
             self.timings["distance_field_s"] = time.perf_counter() - start
@@ -437,6 +478,27 @@ class MeshModel:
         if self._distance is None:
             self._distance = MeshDistance(self.vertices, self.faces, self.tree)
         return self._distance
+
+    def candidate_pool(self, spacing: float = POOL_SPACING_M) -> CurvatureTable:
+        """The per-vertex curvature map thinned to one vertex per cell of ``spacing`` (cached)."""
+        pool = self._pools.get(spacing)
+        if pool is None:
+            keys = self.cell_keys(spacing)
+            _, first = np.unique(keys, return_index=True)
+            dense = self.vertex_curvatures
+            pool = CurvatureTable(first, dense.k1[first], dense.k2[first], dense.d1[first])
+            self._pools[spacing] = pool
+        return pool
+
+    def cell_keys(self, spacing: float) -> np.ndarray:
+        """(n,) int64 key of the cubic cell of side ``spacing`` holding each vertex (cached)."""
+        keys = self._cell_keys.get(spacing)
+        if keys is None:
+            cell = np.floor((self.vertices - self.vertices.min(0)) / spacing).astype(np.int64)
+            dims = cell.max(0) + 1
+            keys = (cell[:, 0] * dims[1] + cell[:, 1]) * dims[2] + cell[:, 2]
+            self._cell_keys[spacing] = keys
+        return keys
 
     @property
     def extent_m(self) -> float:
