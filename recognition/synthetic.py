@@ -15,7 +15,6 @@ from typing import Protocol
 
 import numpy as np
 import trimesh
-from scipy.spatial import cKDTree
 from scipy.spatial.transform import Rotation
 
 from recognition.errors import DegenerateGeometry, InvalidCurveData
@@ -25,8 +24,10 @@ __all__ = [
     "ImplicitSurface",
     "SyntheticCurves",
     "implicit_data_curves",
+    "local_submesh",
     "mesh_data_curves",
     "mesh_plane_section",
+    "plane_section_polyline",
     "random_rigid_transform",
     "resample_around",
     "sampling_plane_normals",
@@ -133,74 +134,104 @@ def resample_around(polyline: np.ndarray, point: np.ndarray, n_points: int, spac
     return np.column_stack([np.interp(s, s_nodes, polyline[:, i]) for i in range(3)])
 
 
-def _chain_segments(segments: np.ndarray, start: np.ndarray, merge_tol: float) -> np.ndarray:
-    """Order the plane-section segments of the component nearest ``start`` into a polyline."""
-    ends = segments.reshape(-1, 3)
-    tree = cKDTree(ends)
-    # merge coincident endpoints (each section vertex is shared by two faces)
-    label = np.arange(len(ends))
-    for i, j in sorted(tree.query_pairs(merge_tol)):
-        label[j] = label[i]
-    for i in range(len(label)):  # path compression
-        while label[label[i]] != label[i]:
-            label[i] = label[label[i]]
-        label[i] = label[label[i]]
-    _, node = np.unique(label, return_inverse=True)
-    node = node.reshape(-1, 2)
-    n_nodes = node.max() + 1
-    position = np.zeros((n_nodes, 3))
-    position[node.ravel()] = ends
-    adjacency: list[list[int]] = [[] for _ in range(n_nodes)]
-    for a, b in node:
-        if a != b:
-            adjacency[a].append(b)
-            adjacency[b].append(a)
-    # the segment nearest start, walked both ways
-    mid = 0.5 * (segments[:, 0] + segments[:, 1])
-    s0 = int(np.argmin(np.linalg.norm(mid - start, axis=1)))
-    a, b = node[s0]
+def plane_section_polyline(
+    vertices: np.ndarray, faces: np.ndarray, point: np.ndarray, plane_normal: np.ndarray
+) -> np.ndarray:
+    """The plane section through ``point`` of a triangle set, as an ordered polyline.
 
-    def walk(prev, cur):
-        path = [cur]
-        seen = {prev, cur}
+    Each section point lies on a mesh edge crossed by the plane and is keyed by that
+    edge, so the segments of neighbouring triangles join exactly. The component of the
+    section nearest ``point`` is walked both ways from the segment nearest it; a closed
+    section is returned as an open loop. Signed distances are taken for every vertex
+    given: pass a compact local mesh (see :func:`local_submesh`) when cutting a small
+    region of a large one.
+    """
+    n = np.asarray(plane_normal, float)
+    d = vertices @ n - point @ n
+    tri_d = d[faces]
+    above = tri_d > 0
+    crossing = above.any(axis=1) & ~above.all(axis=1)
+    if not crossing.any():
+        raise DegenerateGeometry("the sampling plane does not cut the mesh near p")
+    f, fd = faces[crossing], tri_d[crossing]
+    ft = vertices[f]
+    # the two edges of each crossing triangle whose endpoints lie on opposite sides
+    i0 = np.array([0, 1, 2])
+    i1 = np.array([1, 2, 0])
+    cut = (fd[:, i0] > 0) != (fd[:, i1] > 0)  # (m, 3)
+    keep = cut.sum(axis=1) == 2
+    f, fd, ft, cut = f[keep], fd[keep], ft[keep], cut[keep]
+    sel = np.argsort(~cut, axis=1, kind="stable")[:, :2]  # (m, 2) edge slots
+    a_idx, b_idx = i0[sel], i1[sel]
+    rows = np.arange(len(f))[:, None]
+    va, vb = f[rows, a_idx], f[rows, b_idx]
+    da, db = fd[rows, a_idx], fd[rows, b_idx]
+    pa, pb = ft[rows, a_idx], ft[rows, b_idx]
+    s = (da / (da - db))[..., None]
+    pts = pa + s * (pb - pa)  # (m, 2, 3)
+    key = np.minimum(va, vb) * len(vertices) + np.maximum(va, vb)
+    nodes, inverse = np.unique(key.ravel(), return_inverse=True)
+    seg = inverse.reshape(-1, 2)
+    position = np.zeros((len(nodes), 3))
+    position[seg.ravel()] = pts.reshape(-1, 3)
+    # the (at most two) segments at each node
+    link = np.full((len(nodes), 2), -1, np.int64)
+    flat_node = seg.ravel()
+    order = np.argsort(flat_node, kind="stable")
+    owner = (np.arange(flat_node.size) // 2)[order]
+    node_sorted = flat_node[order]
+    slot = np.arange(node_sorted.size) - np.searchsorted(node_sorted, node_sorted)
+    ok = slot < 2
+    link[node_sorted[ok], slot[ok]] = owner[ok]
+    mid = 0.5 * (position[seg[:, 0]] + position[seg[:, 1]])
+    first = int(np.argmin(np.linalg.norm(mid - point, axis=1)))
+    used = np.zeros(len(seg), bool)
+    used[first] = True
+    link_l, seg_l = link.tolist(), seg.tolist()
+
+    def walk(node):
+        path = [node]
         while True:
-            nxt = [v for v in adjacency[cur] if v not in seen]
-            if not nxt:
-                return path, False
-            prev, cur = cur, nxt[0]
-            if cur in seen:
-                return path, True
-            seen.add(cur)
-            path.append(cur)
+            s0, s1 = link_l[node]
+            nxt = s0 if s0 >= 0 and not used[s0] else (s1 if s1 >= 0 and not used[s1] else -1)
+            if nxt < 0:
+                return path
+            used[nxt] = True
+            a, b = seg_l[nxt]
+            node = b if a == node else a
+            path.append(node)
 
-    forward, _ = walk(a, b)
-    backward, _ = walk(b, a)
-    order = backward[::-1] + forward
-    # a closed loop walked both ways meets itself: keep each node once
-    _, first = np.unique(order, return_index=True)
-    order = [order[i] for i in sorted(first)]
-    return position[order]
+    a, b = seg_l[first]
+    forward = walk(b)
+    backward = walk(a)
+    return position[backward[::-1] + forward]
+
+
+def local_submesh(vertices: np.ndarray, faces: np.ndarray, face_ids: np.ndarray):
+    """The faces ``face_ids`` as a compact mesh: (local vertices, reindexed faces)."""
+    used, inverse = np.unique(faces[face_ids], return_inverse=True)
+    return vertices[used], inverse.reshape(-1, 3)
 
 
 def mesh_plane_section(
-    mesh: trimesh.Trimesh, point: np.ndarray, plane_normal: np.ndarray, radius: float | None = None
+    mesh: trimesh.Trimesh,
+    point: np.ndarray,
+    plane_normal: np.ndarray,
+    radius: float | None = None,
+    local_faces: np.ndarray | None = None,
 ) -> np.ndarray:
     """The connected plane section of ``mesh`` through ``point``, as an ordered polyline.
 
-    Only faces within ``radius`` of ``point`` are intersected when given (a closed
-    section is then cut into an open arc through the point).
+    Only faces within ``radius`` of ``point`` (or the given ``local_faces``) are
+    intersected (a closed section is then cut into an open arc through the point).
     """
-    faces = None
-    if radius is not None:
-        d = np.linalg.norm(mesh.triangles_center - point, axis=1)
-        faces = np.flatnonzero(d <= radius + mesh.edges_unique_length.max())
-    segments = trimesh.intersections.mesh_plane(
-        mesh, plane_normal, point, return_faces=False, local_faces=faces
-    )
-    if len(segments) == 0:
-        raise DegenerateGeometry("the sampling plane does not cut the mesh near p")
-    scale = float(np.median(np.linalg.norm(segments[:, 1] - segments[:, 0], axis=1)))
-    return _chain_segments(np.asarray(segments), point, merge_tol=max(1e-6 * scale, 1e-12))
+    vertices, faces = np.asarray(mesh.vertices), np.asarray(mesh.faces)
+    if local_faces is None and radius is not None:
+        local_faces = np.flatnonzero(np.linalg.norm(mesh.triangles_center - point, axis=1)
+                                     <= radius)
+    if local_faces is not None:
+        vertices, faces = local_submesh(vertices, faces, local_faces)
+    return plane_section_polyline(vertices, faces, point, plane_normal)
 
 
 def _finish(

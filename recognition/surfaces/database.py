@@ -29,7 +29,7 @@ from recognition.surfaces.registration import (
 __all__ = ["DATABASE_FORMAT", "ModelDatabase", "Recognition"]
 
 #: Version of the on-disk format; a different version is rebuilt, never read.
-DATABASE_FORMAT = 1
+DATABASE_FORMAT = 2
 #: Models whose registration error is computed exactly (the best by field error).
 EXACT_TOP = 3
 #: Default largest registration error (metres) of a recognised model: data that fit no
@@ -118,6 +118,8 @@ class ModelDatabase:
         self.registration = registration
         self.mode = RegistrationMode(mode)
         self.threads = threads
+        #: Where the database was loaded from (None if built in memory).
+        self.directory: Path | None = None
 
     @property
     def names(self) -> list[str]:
@@ -138,7 +140,7 @@ class ModelDatabase:
         registration: RegistrationConfig = RegistrationConfig(),
         progress: bool = False,
     ) -> ModelDatabase:
-        """Validate each mesh (metres) and build its lookup table and distance field."""
+        """Validate each mesh (metres) and build its lookup table, curvature map and field."""
         models = {}
         items = list(meshes.items())
         if progress:
@@ -148,6 +150,7 @@ class ModelDatabase:
         for name, mesh in items:
             model = MeshModel(name, mesh, config)
             model.table  # noqa: B018 - build now, not at the first recognition
+            model.vertex_curvatures  # noqa: B018
             model.distance_field  # noqa: B018
             models[name] = model
         return cls(models, registration)
@@ -163,7 +166,7 @@ class ModelDatabase:
         directory = Path(directory)
         manifest = {"format": DATABASE_FORMAT, "models": {}}
         for name, model in self.models.items():
-            table, df = model.table, model.distance_field
+            table, df, dense = model.table, model.distance_field, model.vertex_curvatures
             file = f"{_safe(name)}.npz"
             arrays = {
                 "vertices": model.vertices,
@@ -172,6 +175,9 @@ class ModelDatabase:
                 "table_k1": table.k1,
                 "table_k2": table.k2,
                 "table_d1": table.d1,
+                "vertex_k1": dense.k1.astype(np.float32),
+                "vertex_k2": dense.k2.astype(np.float32),
+                "vertex_d1": dense.d1.astype(np.float32),
                 "field_origin": df.origin,
                 "field_voxel": np.array(df.voxel),
                 "field_band": np.array(df.band),
@@ -232,12 +238,22 @@ class ModelDatabase:
                 a["field_values"],
                 float(a["field_band"]),
             )
-            model = MeshModel(name, mesh, model_config, table, df, validate=False)
+            dense = CurvatureTable(
+                np.arange(len(a["vertices"])),
+                a["vertex_k1"].astype(float),
+                a["vertex_k2"].astype(float),
+                a["vertex_d1"].astype(float),
+            )
+            model = MeshModel(
+                name, mesh, model_config, table, df, validate=False, vertex_curvatures=dense
+            )
             if model.hash != entry["mesh_hash"]:
                 raise InvalidModel(f"{name}: mesh content does not match its hash; rebuild it")
             model.timings.update(entry.get("timings_s", {}))
             models[name] = model
-        return cls(models, registration)
+        database = cls(models, registration)
+        database.directory = directory
+        return database
 
     # --- recognition ------------------------------------------------------------------
 

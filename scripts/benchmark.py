@@ -1,0 +1,457 @@
+"""Recognition benchmark over the 10-model database or your own meshes (thesis 4.3.4).
+
+python scripts/benchmark.py                               # all three methods
+python scripts/benchmark.py --method fast --json out.json
+python scripts/benchmark.py --sweep delta                 # Fig. 4.11 (also length, angle)
+python scripts/benchmark.py --mesh-dir my_meshes --units mm
+python scripts/benchmark.py --backend ray --ray-address auto --workers 8
+"""
+
+from __future__ import annotations
+
+import argparse
+import hashlib
+import json
+import os
+import platform
+import sys
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+import numpy as np
+
+from recognition import benchmark as bench
+from recognition.errors import RecognitionError
+from recognition.reproduction.tables import markdown_table
+from recognition.surfaces.database import ModelDatabase
+from recognition.surfaces.registration import RegistrationConfig
+from tactile_sim.errors import SimulationError
+
+ROOT = Path(__file__).resolve().parents[1]
+METHODS = ("fast", "thesis", "icp-baseline")
+SWEEPS = {
+    "delta": ("delta_per_mm", [0.01, 0.02, 0.03, 0.04, 0.05], "Fig. 4.11"),
+    "length": ("length_mm", [6.0, 12.0, 18.0, 24.0, 30.0], "Fig. 4.12"),
+    "angle": ("plane_angle_deg", [15.0, 30.0, 45.0, 60.0, 75.0, 90.0], "Fig. 4.13"),
+}
+
+
+@dataclass(frozen=True)
+class Config:
+    """Benchmark settings (thesis Section 4.3.4 defaults).
+
+    Attributes
+    ----------
+    methods : tuple of str
+        Registration modes compared in one run.
+    per_model : int
+        Instances per model.
+    n_points, spacing_mm, plane_angle_deg, noise_mm
+        Data curves: points per curve, their spacing, the angle between sampling
+        planes and the noise (mm).
+    delta_per_mm : float
+        Table-lookup tolerance (thesis: 0.03 1/mm).
+    thesis_instances : int
+        Instances run in thesis mode (it takes about a minute each); 0 for all.
+    workers : int
+    backend : {"local", "ray"}
+    ray_address : str or None
+    mesh_dir : Path or None
+        Benchmark these meshes (OBJ/PLY/STL) instead of the catalog.
+    units : {"m", "mm"}
+        Units of the meshes in ``mesh_dir``.
+    sweep : str or None
+        "delta", "length" or "angle": success and time against that parameter.
+    results : Path or None
+        JSONL file of per-instance records (resumable); default under runs/benchmark/.
+    json_path : Path or None
+        Summary per method as JSON.
+    out_dir : Path
+        Where the Markdown summary and figures go.
+    seed : int
+    """
+
+    methods: tuple[str, ...] = METHODS
+    per_model: int = 10
+    n_points: int = 81
+    spacing_mm: float = 0.3
+    plane_angle_deg: float = 60.0
+    noise_mm: float = 0.02
+    delta_per_mm: float = 0.03
+    thesis_instances: int = 20
+    workers: int = field(default_factory=lambda: os.cpu_count() or 1)
+    backend: str = "local"
+    ray_address: str | None = None
+    mesh_dir: Path | None = None
+    units: str = "m"
+    sweep: str | None = None
+    results: Path | None = None
+    json_path: Path | None = None
+    out_dir: Path = ROOT / "docs" / "benchmarks"
+    seed: int = 0
+
+    def source(self, **overrides) -> bench.SyntheticSource:
+        return bench.SyntheticSource(
+            per_model=self.per_model,
+            n_points=overrides.get("n_points", self.n_points),
+            spacing_m=self.spacing_mm * 1e-3,
+            plane_angle_deg=overrides.get("plane_angle_deg", self.plane_angle_deg),
+            noise_std_m=self.noise_mm * 1e-3,
+            seed=self.seed,
+        )
+
+    def registration(self, **overrides) -> RegistrationConfig:
+        return RegistrationConfig(delta=overrides.get("delta_per_mm", self.delta_per_mm) * 1e3)
+
+
+def load_database(config: Config) -> tuple[ModelDatabase, str]:
+    """The catalog's database, or one built (and cached) from ``config.mesh_dir``."""
+    if config.mesh_dir is None:
+        from tactile_sim.objects.database import catalog_database
+
+        return catalog_database(), "catalog"
+    import trimesh
+
+    files = sorted(
+        p for p in Path(config.mesh_dir).iterdir() if p.suffix.lower() in (".obj", ".ply", ".stl")
+    )
+    if not files:
+        raise RecognitionError(f"no OBJ, PLY or STL files in {config.mesh_dir}")
+    scale = {"m": 1.0, "mm": 1e-3}[config.units]
+    digest = hashlib.sha256()
+    for p in files:
+        digest.update(p.name.encode())
+        digest.update(p.read_bytes())
+    digest.update(str(scale).encode())
+    directory = ROOT / "runs" / "mesh_databases" / digest.hexdigest()[:16]
+    try:
+        return ModelDatabase.load(directory), Path(config.mesh_dir).name
+    except RecognitionError:
+        pass
+    meshes = {}
+    for p in files:
+        mesh = trimesh.load(p, force="mesh")
+        mesh.apply_scale(scale)
+        meshes[p.stem] = mesh
+    print(f"building a database of {len(meshes)} meshes from {config.mesh_dir}", flush=True)
+    ModelDatabase.from_meshes(meshes, progress=True).save(directory)
+    return ModelDatabase.load(directory), Path(config.mesh_dir).name
+
+
+def _jobs(database, config, methods, source, registration, limit_thesis=True):
+    specs = bench.instance_specs(database, source)
+    jobs = []
+    for method in methods:
+        chosen = specs
+        if method == "thesis" and limit_thesis and config.thesis_instances:
+            # spread over the models: instance 0 of each, then 1, ...
+            chosen = sorted(specs, key=lambda s: (s.index, s.model))[: config.thesis_instances]
+        jobs += [(spec, source, method, registration) for spec in chosen]
+    return jobs
+
+
+def _results_path(config, name, source, registration, tag=""):
+    key = bench.settings_key(source, registration)
+    return config.results or ROOT / "runs" / "benchmark" / f"{name}{tag}_{key}.jsonl"
+
+
+def machine() -> str:
+    return f"{platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}"
+
+
+def run(config: Config) -> dict:
+    """Run the benchmark (or a sweep); write records, summary JSON and Markdown."""
+    database, name = load_database(config)
+    directory = database.directory
+    started = time.strftime("%Y-%m-%d %H:%M")
+    if config.sweep:
+        return _run_sweep(config, database, name, directory, started)
+    source, registration = config.source(), config.registration()
+    path = _results_path(config, name, source, registration)
+    records = bench.run(
+        directory,
+        _jobs(database, config, config.methods, source, registration),
+        path,
+        workers=config.workers,
+        backend=config.backend,
+        ray_address=config.ray_address,
+    )
+    records = [r for r in records if r["method"] in config.methods]
+    summary = bench.summarize(records)
+    if config.json_path:
+        _write_json(config.json_path, summary)
+    text = _markdown(config, database, name, records, summary, started, path)
+    out = Path(config.out_dir) / f"{name}.md"
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(text)
+    print(text)
+    return summary
+
+
+def _shown(path: Path) -> Path:
+    path = Path(path).resolve()
+    return path.relative_to(ROOT) if path.is_relative_to(ROOT) else path
+
+
+def _write_json(path: Path, payload) -> None:
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_suffix(path.suffix + ".tmp")
+    tmp.write_text(json.dumps(payload, indent=2))
+    tmp.replace(path)
+
+
+def _markdown(config, database, name, records, summary, started, path) -> str:
+    lines = [
+        f"# Recognition benchmark: {name}",
+        "",
+        f"Command: `python scripts/benchmark.py {' '.join(sys.argv[1:])}`  ",
+        f"Date: {started}; machine: {machine()}; workers: {config.workers} ({config.backend}).  ",
+        f"Instances: {config.per_model} per model, n = {config.n_points} points per curve at "
+        f"d = {config.spacing_mm} mm (l = {(config.n_points - 1) * config.spacing_mm:g} mm), "
+        f"planes {config.plane_angle_deg:g} deg apart, noise sigma {config.noise_mm} mm, "
+        f"delta = {config.delta_per_mm} 1/mm. Thesis mode on the first "
+        f"{config.thesis_instances or 'all'} instances. Records: `{_shown(path)}`.",
+        "",
+        "## Summary",
+        "",
+        markdown_table(
+            [
+                "method",
+                "instances",
+                "success %",
+                "median time s",
+                "p90 time s",
+                "median localisation error mm",
+            ],
+            [
+                [
+                    m,
+                    s["instances"],
+                    100 * s["success_rate"],
+                    s["median_time_s"],
+                    s["p90_time_s"],
+                    s["median_localization_error_mm"],
+                ]
+                for m, s in summary.items()
+            ],
+            digits=4,
+        ),
+    ]
+    if "fast" in summary:
+        for other in ("icp-baseline", "thesis"):
+            if other in summary:
+                both = {r["instance"] for r in records if r["method"] == other}
+                fast_t = [
+                    r["time_s"] for r in records if r["method"] == "fast" and r["instance"] in both
+                ]
+                other_t = [r["time_s"] for r in records if r["method"] == other]
+                lines += [
+                    "",
+                    f"fast vs {other} on the same {len(both)} instances: median time "
+                    f"{np.median(fast_t):.3g} s vs {np.median(other_t):.3g} s "
+                    f"({np.median(other_t) / np.median(fast_t):.1f}x).",
+                ]
+    names = database.names
+    first = {
+        r["model"]: r for r in records if r["method"] == "fast" and r["instance"].endswith("/0")
+    }
+    if first:
+        lines += [
+            "",
+            "## Registration errors (mm), Table 4.6 analogue (fast, instance 0 of "
+            "each object; columns: object, rows: model; '-' rejected at table lookup)",
+            "",
+        ]
+        rows = [
+            [m, *[first[o]["errors_mm"].get(m) if o in first else None for o in names]]
+            for m in names
+        ]
+        lines.append(markdown_table(["model \\ object", *names], rows, digits=3))
+        lines += ["", "## Registration times (s), Table 4.7 analogue (same instances)", ""]
+        rows = [
+            [m, *[first[o]["times_s"].get(m) if o in first else None for o in names]] for m in names
+        ]
+        rows.append(["recognition", *[first[o]["time_s"] if o in first else None for o in names]])
+        lines.append(markdown_table(["model \\ object", *names], rows, digits=3))
+    lines += ["", "## Model tables, Table 4.4 analogue", ""]
+    rows = []
+    for m in names:
+        model = database[m]
+        t = model.timings
+        rows.append(
+            [
+                m,
+                len(model.vertices),
+                len(model.faces),
+                " x ".join(f"{x * 1e3:.1f}" for x in np.ptp(model.vertices, axis=0)),
+                len(model.table),
+                t.get("sampling_s"),
+                t.get("curvatures_s"),
+                (t.get("sampling_s") or 0) + (t.get("curvatures_s") or 0),
+                t.get("vertex_curvatures_s"),
+                t.get("distance_field_s"),
+            ]
+        )
+    lines.append(
+        markdown_table(
+            [
+                "model",
+                "vertices",
+                "triangles",
+                "dimension mm",
+                "sample vertices",
+                "sampling s",
+                "curvatures s",
+                "table s",
+                "vertex curvature map s",
+                "distance field s",
+            ],
+            rows,
+            digits=3,
+        )
+    )
+    confusion = {}
+    for r in records:
+        if r["method"] == "fast":
+            confusion.setdefault(r["model"], {}).setdefault(str(r["recognized"]), 0)
+            confusion[r["model"]][str(r["recognized"])] += 1
+    if confusion:
+        labels = [*names, "None"]
+        lines += ["", "## Confusion (fast, all instances; rows: object, columns: recognised)", ""]
+        lines.append(
+            markdown_table(
+                ["object", *labels],
+                [[o, *[confusion.get(o, {}).get(c, 0) for c in labels]] for o in names],
+            )
+        )
+    return "\n".join(lines) + "\n"
+
+
+def _run_sweep(config, database, name, directory, started) -> dict:
+    parameter, values, figure = SWEEPS[config.sweep]
+    results = {}
+    for value in values:
+        overrides = {}
+        if parameter == "length_mm":
+            overrides["n_points"] = round(value / config.spacing_mm) + 1
+        else:
+            overrides[parameter] = value
+        source, registration = config.source(**overrides), config.registration(**overrides)
+        path = _results_path(config, name, source, registration, f"_sweep_{config.sweep}")
+        jobs = _jobs(database, config, ("fast",), source, registration)
+        records = bench.run(
+            directory,
+            jobs,
+            path,
+            workers=config.workers,
+            backend=config.backend,
+            ray_address=config.ray_address,
+        )
+        results[value] = bench.summarize(r for r in records if r["method"] == "fast")["fast"]
+    payload = {
+        "parameter": parameter,
+        "figure": figure,
+        "date": started,
+        "machine": machine(),
+        "points": [{"value": v, **s} for v, s in results.items()],
+    }
+    out = Path(config.out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    _write_json(out / f"sweep_{config.sweep}.json", payload)
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(1, 2, figsize=(9, 3.5))
+    xs = list(results)
+    ax[0].plot(xs, [100 * results[v]["success_rate"] for v in xs], "o-")
+    ax[0].set(xlabel=parameter, ylabel="success %", ylim=(0, 105), title=f"{figure}: success rate")
+    ax[1].plot(xs, [results[v]["median_time_s"] for v in xs], "o-")
+    ax[1].set(xlabel=parameter, ylabel="median recognition time s", title="time")
+    fig.tight_layout()
+    fig.savefig(out / f"sweep_{config.sweep}.png", dpi=110)
+    plt.close(fig)
+    print(
+        markdown_table(
+            [parameter, "success %", "median time s", "median loc. error mm"],
+            [
+                [v, 100 * s["success_rate"], s["median_time_s"], s["median_localization_error_mm"]]
+                for v, s in results.items()
+            ],
+        )
+    )
+    return payload
+
+
+def parse_args(argv=None) -> Config:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument(
+        "--method",
+        action="append",
+        choices=METHODS,
+        help="registration mode (repeatable; default all three)",
+    )
+    p.add_argument("--per-model", type=int, default=10)
+    p.add_argument("--n-points", type=int, default=81)
+    p.add_argument("--spacing-mm", type=float, default=0.3)
+    p.add_argument("--plane-angle", type=float, default=60.0)
+    p.add_argument("--noise-mm", type=float, default=0.02)
+    p.add_argument("--delta", type=float, default=0.03, help="lookup tolerance, 1/mm")
+    p.add_argument("--thesis-instances", type=int, default=20)
+    p.add_argument("--workers", type=int, default=os.cpu_count() or 1)
+    p.add_argument("--backend", choices=("local", "ray"), default="local")
+    p.add_argument("--ray-address", default=None, help="existing Ray cluster (e.g. auto)")
+    p.add_argument("--mesh-dir", type=Path)
+    p.add_argument("--units", choices=("m", "mm"), default="m")
+    p.add_argument("--sweep", choices=tuple(SWEEPS))
+    p.add_argument("--results", type=Path, help="JSONL of per-instance records")
+    p.add_argument("--json", type=Path, dest="json_path", help="summary per method")
+    p.add_argument("--out-dir", type=Path, default=ROOT / "docs" / "benchmarks")
+    p.add_argument("--seed", type=int, default=0)
+    a = p.parse_args(argv)
+    for name in ("per_model", "n_points", "workers"):
+        if getattr(a, name) < 1:
+            p.error(f"--{name.replace('_', '-')} must be at least 1")
+    if a.spacing_mm <= 0 or a.delta <= 0 or a.noise_mm < 0:
+        p.error("--spacing-mm and --delta must be positive, --noise-mm not negative")
+    if a.mesh_dir is not None and not a.mesh_dir.is_dir():
+        p.error(f"--mesh-dir {a.mesh_dir} is not a directory")
+    return Config(
+        methods=tuple(a.method) if a.method else METHODS,
+        per_model=a.per_model,
+        n_points=a.n_points,
+        spacing_mm=a.spacing_mm,
+        plane_angle_deg=a.plane_angle,
+        noise_mm=a.noise_mm,
+        delta_per_mm=a.delta,
+        thesis_instances=a.thesis_instances,
+        workers=a.workers,
+        backend=a.backend,
+        ray_address=a.ray_address,
+        mesh_dir=a.mesh_dir,
+        units=a.units,
+        sweep=a.sweep,
+        results=a.results,
+        json_path=a.json_path,
+        out_dir=a.out_dir,
+        seed=a.seed,
+    )
+
+
+def main(argv=None) -> int:
+    config = parse_args(argv)
+    try:
+        run(config)
+    except (RecognitionError, SimulationError, OSError, ValueError) as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

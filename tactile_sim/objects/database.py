@@ -1,0 +1,68 @@
+"""The catalog's recognition database, built once and cached.
+
+This is where the simulator hands its objects to the recognition library: besides
+``recognition.DataCurves`` (the seam of DESIGN.md), it is the one place tactile_sim
+imports from ``recognition``, lazily, so that importing the catalog stays light.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import shutil
+
+from tactile_sim.errors import AssetError
+from tactile_sim.objects.cache import build_lock, generated_dir
+from tactile_sim.objects.catalog import load_catalog
+
+__all__ = ["catalog_database"]
+
+
+def catalog_database(*, progress: bool = True):
+    """The :class:`recognition.ModelDatabase` of the ten catalog objects.
+
+    Cached under ``assets/generated/database/<key>``, the key hashing every object's
+    recipe hash, the table settings and the database format; a missing, stale or corrupt
+    cache is rebuilt (with a progress bar and a one-line message), never trusted.
+    """
+    from recognition.errors import InvalidModel
+    from recognition.surfaces.database import DATABASE_FORMAT, ModelDatabase
+    from recognition.surfaces.mesh_model import MeshModelConfig
+
+    catalog = load_catalog()
+    config = MeshModelConfig()
+    payload = json.dumps(
+        [sorted((n, o.recipe_hash) for n, o in catalog.items()), repr(config), DATABASE_FORMAT]
+    )
+    key = hashlib.sha256(payload.encode()).hexdigest()[:16]
+    directory = generated_dir("database") / key
+    try:
+        return ModelDatabase.load(directory, config=config)
+    except InvalidModel:
+        pass
+    with build_lock(directory.with_suffix(".lock")):
+        try:
+            return ModelDatabase.load(directory, config=config)
+        except InvalidModel:
+            if progress:
+                print(
+                    f"building the recognition database of {len(catalog)} objects "
+                    f"(once; cached in {directory})",
+                    flush=True,
+                )
+            database = ModelDatabase.from_meshes(
+                {name: obj.mesh for name, obj in catalog.items()},
+                config=config,
+                progress=progress,
+            )
+            tmp = directory.with_name(directory.name + ".tmp")
+            shutil.rmtree(tmp, ignore_errors=True)
+            try:
+                database.save(tmp)
+                shutil.rmtree(directory, ignore_errors=True)
+                tmp.rename(directory)
+            except OSError as exc:
+                raise AssetError(
+                    f"cannot write the recognition database to {directory}: {exc}"
+                ) from exc
+            return ModelDatabase.load(directory, config=config)
