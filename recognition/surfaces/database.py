@@ -296,11 +296,14 @@ class ModelDatabase:
                 registrations = dict(zip(names, pool.map(one, names), strict=True))
         else:
             registrations = {name: one(name) for name in names}
-        # exact errors for the models that can win; the rest stay field-based (their
-        # errors are within about 0.01 mm and far from the best)
-        for name, _ in sorted(registrations.items(), key=lambda kv: kv[1].error_m)[:EXACT_TOP]:
+        # exact errors for the models that can win (the best one's pose polished on exact
+        # closest points); the rest stay field-based (within about 0.01 mm, far from best)
+        order = sorted(registrations.items(), key=lambda kv: kv[1].error_m)[:EXACT_TOP]
+        for rank, (name, _) in enumerate(order):
             start_exact = time.perf_counter()
-            registrations[name] = registrations[name].with_exact_error(self.models[name], curves)
+            registrations[name] = registrations[name].with_exact_error(
+                self.models[name], curves, refine=rank == 0, point=geometry.point
+            )
             registrations[name] = replace(
                 registrations[name],
                 time_s=registrations[name].time_s + time.perf_counter() - start_exact,

@@ -150,12 +150,28 @@ class Registration:
     trace: tuple[float, ...] = field(default_factory=tuple)
     error_is_exact: bool = True
 
-    def with_exact_error(self, model: MeshModel, curves: DataCurves) -> Registration:
-        """This registration with its error recomputed exactly (if it was not)."""
+    def with_exact_error(
+        self, model: MeshModel, curves: DataCurves, refine: bool = False, point=None
+    ) -> Registration:
+        """This registration with its error computed exactly (if it was not).
+
+        With ``refine``, the pose is first polished by point-to-plane Gauss-Newton on exact
+        closest points (:func:`refine_exact`); ``point`` (the data's p) then moves with it.
+        """
         if self.error_is_exact or not np.isfinite(self.error_m):
             return self
-        X = curves.points @ self.T_model_from_data[:3, :3].T + self.T_model_from_data[:3, 3]
-        error = float(np.mean(model.distance.closest(X)[0]))
+        R, t = self.T_model_from_data[:3, :3], self.T_model_from_data[:3, 3]
+        if refine:
+            R, t, error = refine_exact(model, curves.points, R, t)
+            location = self.location if point is None else R @ point + t
+            return replace(
+                self,
+                error_m=error,
+                error_is_exact=True,
+                T_model_from_data=_pose_matrix(R, t),
+                location=location,
+            )
+        error = float(np.mean(model.distance.closest(curves.points @ R.T + t)[0]))
         return replace(self, error_m=error, error_is_exact=True)
 
 
@@ -275,6 +291,26 @@ def _gauss_newton(field, points, R, t, iterations):
     return R, t, np.sqrt(cost), tuple(trace)
 
 
+def refine_exact(model: MeshModel, points: np.ndarray, R, t, iterations: int = 10):
+    """Point-to-plane Gauss-Newton on exact closest points (the last six-DOF polish).
+
+    Returns R, t and the mean exact distance after refinement.
+    """
+    for _ in range(iterations):
+        X = points @ R.T + t
+        _, q, face = model.distance.closest(X)
+        n = model.distance.face_normals[face]
+        r = np.einsum("ij,ij->i", X - q, n)
+        c = X.mean(axis=0)
+        J = np.concatenate([np.cross(X - c, n), n], axis=1)
+        step = np.linalg.lstsq(J, -r, rcond=None)[0]
+        dR = Rotation.from_rotvec(step[:3]).as_matrix()
+        R, t = dR @ R, dR @ (t - c) + c + step[3:]
+        if np.linalg.norm(step) < 1e-10:
+            break
+    return R, t, float(np.mean(model.distance.closest(points @ R.T + t)[0]))
+
+
 def _pose_matrix(R, t) -> np.ndarray:
     T = np.eye(4)
     T[:3, :3], T[:3, 3] = R, t
@@ -360,10 +396,10 @@ def _register_fast(model, curves, geometry, config, start, exact=True) -> Regist
         R, t, rms, trace = _gauss_newton(field, stage_points, R[keep], t[keep], iterations)
     best = int(np.argmin(rms))
     R, t = R[best], t[best]
-    X = points @ R.T + t
-    error = (
-        float(np.mean(model.distance.closest(X)[0])) if exact else float(np.mean(np.abs(field(X))))
-    )
+    if exact:
+        R, t, error = refine_exact(model, points, R, t)
+    else:
+        error = float(np.mean(np.abs(field(points @ R.T + t))))
     return Registration(
         model.name,
         error,
