@@ -108,14 +108,14 @@ class JoystickExperiment:
     b: float = 1.75
     spacing: float = 0.05
     noise_std: float = 0.003
-    arc_length: float = 3.0
+    arc_length: float = 6.0
     n_arcs: int = 2
-    estimates_per_arc: int = 10
-    window: int = 25
+    estimates_per_arc: int = 20
+    window: int = 21
     degree: int = 3
-    kappa_window: int | None = 25
+    kappa_window: int | None = 21
     n_pairs: int = 80
-    trials: int = 10
+    trials: int = 20
     seed: int = 0
 
 
