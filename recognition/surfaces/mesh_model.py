@@ -171,15 +171,19 @@ def _adjacency(n_vertices: int, faces: np.ndarray):
     return A, VF
 
 
-def _gather(indptr: np.ndarray, indices: np.ndarray, rows: np.ndarray) -> np.ndarray:
-    """Concatenated CSR rows ``rows`` (the column indices), without a Python loop."""
-    starts = indptr[rows]
-    counts = indptr[rows + 1] - starts
-    total = int(counts.sum())
-    if total == 0:
-        return indices[:0]
-    offsets = np.repeat(starts - np.concatenate([[0], np.cumsum(counts)[:-1]]), counts)
-    return indices[offsets + np.arange(total)]
+def _padded_rows(M: sp.csr_matrix) -> np.ndarray:
+    """The column indices of each CSR row in a (rows, max_row_length) array, -1 padded."""
+    counts = np.diff(M.indptr)
+    out = np.full((M.shape[0], max(int(counts.max(initial=0)), 1)), -1, np.int64)
+    slot = np.arange(M.indices.size) - np.repeat(M.indptr[:-1], counts)
+    out[np.repeat(np.arange(M.shape[0]), counts), slot] = M.indices
+    return out
+
+
+def _gather(padded: np.ndarray, rows: np.ndarray) -> np.ndarray:
+    """Concatenated rows of a padded index table, padding dropped."""
+    out = padded[rows].ravel()
+    return out[out >= 0]
 
 
 def adaptive_sample(
@@ -208,8 +212,7 @@ def adaptive_sample(
     n_marked, target = 0, config.marked_fraction * n
     samples = []
     order = np.random.default_rng(config.seed).permutation(n)
-    a_ptr, a_idx = A.indptr, A.indices
-    f_ptr, f_idx = VF.indptr, VF.indices
+    neighbours, incident = _padded_rows(A), _padded_rows(VF)
     r_ptr, r_idx = R2.indptr, R2.indices
     for it, v in enumerate(order):
         if marked[v] or marked[r_idx[r_ptr[v] : r_ptr[v + 1]]].any():
@@ -225,13 +228,11 @@ def adaptive_sample(
         rejected = False
         for k in range(config.max_ring + 1):
             if k > 0:
-                nb = _gather(a_ptr, a_idx, layer)
+                nb = _gather(neighbours, layer)
                 layer = np.unique(nb[stamp[nb] != it])
                 stamp[layer] = it
                 layers.append(layer)
-            if ring is None and np.min(fn[_gather(f_ptr, f_idx, layer)] @ nv, initial=1.0) < (
-                cos_theta
-            ):
+            if ring is None and np.min(fn[_gather(incident, layer)] @ nv, initial=1.0) < cos_theta:
                 ring = max(k - 1, config.min_ring)
             if ring is not None and k > ring:
                 break
