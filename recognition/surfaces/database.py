@@ -29,7 +29,7 @@ from recognition.surfaces.registration import (
 __all__ = ["DATABASE_FORMAT", "ModelDatabase", "Recognition"]
 
 #: Version of the on-disk format; a different version is rebuilt, never read.
-DATABASE_FORMAT = 2
+DATABASE_FORMAT = 3
 #: Models whose registration error is computed exactly (the best by field error).
 EXACT_TOP = 3
 #: Default largest registration error (metres) of a recognised model: data that fit no
@@ -171,6 +171,7 @@ class ModelDatabase:
             arrays = {
                 "vertices": model.vertices,
                 "faces": model.faces,
+                "normals": model.normals,
                 "table_vertex": table.vertex,
                 "table_k1": table.k1,
                 "table_k2": table.k2,

@@ -145,18 +145,28 @@ def validate_mesh(mesh: trimesh.Trimesh, name: str = "mesh") -> trimesh.Trimesh:
 
 def vertex_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     """Unit vertex normals: the normalised sum of the incident triangles' unit normals (4.13)."""
-    tri = vertices[faces]
-    fn = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
-    fn /= np.maximum(np.linalg.norm(fn, axis=1, keepdims=True), 1e-300)
-    n = np.zeros_like(vertices)
-    for k in range(3):
-        np.add.at(n, faces[:, k], fn)
+    fn = _face_normals(vertices, faces)
+    owner = faces.ravel()
+    n = np.stack(
+        [
+            np.bincount(owner, weights=np.repeat(fn[:, k], 3), minlength=len(vertices))
+            for k in range(3)
+        ],
+        axis=1,
+    )
     return n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
 
 
 def _face_normals(vertices, faces):
-    tri = vertices[faces]
-    fn = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    a, b, c = vertices[faces[:, 0]], vertices[faces[:, 1]], vertices[faces[:, 2]]
+    u, v = b - a, c - a
+    fn = np.column_stack(
+        [
+            u[:, 1] * v[:, 2] - u[:, 2] * v[:, 1],
+            u[:, 2] * v[:, 0] - u[:, 0] * v[:, 2],
+            u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0],
+        ]
+    )
     return fn / np.maximum(np.linalg.norm(fn, axis=1, keepdims=True), 1e-300)
 
 
@@ -391,13 +401,16 @@ class MeshModel:
         distance_field: DistanceField | None = None,
         validate: bool = True,
         vertex_curvatures: CurvatureTable | None = None,
+        normals: np.ndarray | None = None,
     ):
         self.name = name
         self.config = config
         self.mesh = validate_mesh(mesh, name) if validate else mesh
         self.vertices = np.ascontiguousarray(self.mesh.vertices, dtype=np.float64)
         self.faces = np.ascontiguousarray(self.mesh.faces, dtype=np.int64)
-        self.normals = vertex_normals(self.vertices, self.faces)
+        self.normals = (
+            vertex_normals(self.vertices, self.faces) if normals is None else np.asarray(normals)
+        )
         self.hash = mesh_hash(self.vertices, self.faces)
         self._table = table
         self._dense = vertex_curvatures

@@ -130,6 +130,6 @@ def test_corrupt_or_stale_database_is_refused(tmp_path, database):
     with pytest.raises(InvalidModel, match="no readable model database"):
         ModelDatabase.load(tmp_path / "missing")
     manifest = directory / "manifest.json"
-    manifest.write_text(manifest.read_text().replace('"format": 2', '"format": 1'))
+    manifest.write_text(manifest.read_text().replace('"format": 3', '"format": 1'))
     with pytest.raises(InvalidModel, match="rebuild"):
         ModelDatabase.load(directory)
