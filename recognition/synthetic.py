@@ -227,8 +227,9 @@ def mesh_plane_section(
     """
     vertices, faces = np.asarray(mesh.vertices), np.asarray(mesh.faces)
     if local_faces is None and radius is not None:
-        local_faces = np.flatnonzero(np.linalg.norm(mesh.triangles_center - point, axis=1)
-                                     <= radius)
+        local_faces = np.flatnonzero(
+            np.linalg.norm(mesh.triangles_center - point, axis=1) <= radius
+        )
     if local_faces is not None:
         vertices, faces = local_submesh(vertices, faces, local_faces)
     return plane_section_polyline(vertices, faces, point, plane_normal)
