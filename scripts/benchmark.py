@@ -71,6 +71,8 @@ class Config:
         Summary per method as JSON.
     out_dir : Path
         Where the Markdown summary and figures go.
+    tag : str
+        Suffix of the summary's file name (``<database><tag>.md``).
     seed : int
     """
 
@@ -91,6 +93,7 @@ class Config:
     results: Path | None = None
     json_path: Path | None = None
     out_dir: Path = ROOT / "docs" / "benchmarks"
+    tag: str = ""
     seed: int = 0
 
     def source(self, **overrides) -> bench.SyntheticSource:
@@ -184,7 +187,7 @@ def run(config: Config) -> dict:
     if config.json_path:
         _write_json(config.json_path, summary)
     text = _markdown(config, database, name, records, summary, started, path)
-    out = Path(config.out_dir) / f"{name}.md"
+    out = Path(config.out_dir) / f"{name}{config.tag}.md"
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(text)
     print(text)
@@ -412,6 +415,7 @@ def parse_args(argv=None) -> Config:
     p.add_argument("--results", type=Path, help="JSONL of per-instance records")
     p.add_argument("--json", type=Path, dest="json_path", help="summary per method")
     p.add_argument("--out-dir", type=Path, default=ROOT / "docs" / "benchmarks")
+    p.add_argument("--tag", default="", help="suffix of the summary file name")
     p.add_argument("--seed", type=int, default=0)
     a = p.parse_args(argv)
     for name in ("per_model", "n_points", "workers"):
