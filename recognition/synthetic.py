@@ -240,9 +240,9 @@ def _finish(
 ) -> SyntheticCurves:
     if noise_std_m > 0 and rng is None:
         raise InvalidCurveData("noise_std_m > 0 needs an explicit numpy.random.Generator")
-    T_data_from_model = random_rigid_transform(rng, translation_scale_m) if transform else np.eye(4)
     if transform and rng is None:
         raise InvalidCurveData("a random transform needs an explicit numpy.random.Generator")
+    T_data_from_model = random_rigid_transform(rng, translation_scale_m) if transform else np.eye(4)
     noisy = [
         c + (rng.normal(scale=noise_std_m, size=c.shape) if noise_std_m > 0 else 0.0)
         for c in clean_in_model

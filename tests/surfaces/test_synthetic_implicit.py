@@ -84,11 +84,6 @@ def test_noise_needs_a_generator():
     np.testing.assert_array_equal(untransformed.T_model_from_data, np.eye(4))
 
 
-@pytest.mark.xfail(
-    strict=True,
-    raises=AttributeError,
-    reason="synthetic._finish draws the random transform before checking that rng is given",
-)
 def test_a_random_frame_needs_a_generator():
     s = cf.sphere(1.0)
     with pytest.raises(InvalidCurveData, match="Generator"):
