@@ -5,6 +5,8 @@ python scripts/benchmark.py --method fast --json out.json
 python scripts/benchmark.py --sweep delta                 # Fig. 4.11 (also length, angle)
 python scripts/benchmark.py --mesh-dir my_meshes --units mm
 python scripts/benchmark.py --backend ray --ray-address auto --workers 8
+python scripts/benchmark.py --source sim --json out.json   # simulated robot: Tables 4.5-4.7
+python scripts/benchmark.py --source sim --experiment catalog --sessions 1 --method fast
 """
 
 from __future__ import annotations
@@ -16,7 +18,7 @@ import os
 import platform
 import sys
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
@@ -25,6 +27,7 @@ import numpy as np
 
 from recognition import benchmark as bench
 from recognition.errors import RecognitionError
+from recognition.reproduction.chapter4_closed_form import TABLE_4_5_THESIS, SolidExperiment
 from recognition.reproduction.tables import markdown_table
 from recognition.surfaces.database import ModelDatabase
 from recognition.surfaces.registration import RegistrationConfig
@@ -32,6 +35,8 @@ from tactile_sim.errors import SimulationError
 
 ROOT = Path(__file__).resolve().parents[1]
 METHODS = ("fast", "thesis", "icp-baseline")
+SOURCES = ("synthetic", "sim")
+EXPERIMENTS = ("catalog", "solids")
 SWEEPS = {
     "delta": ("delta_per_mm", [0.01, 0.02, 0.03, 0.04, 0.05], "Fig. 4.11"),
     "length": ("length_mm", [6.0, 12.0, 18.0, 24.0, 30.0], "Fig. 4.12"),
@@ -74,6 +79,21 @@ class Config:
     tag : str
         Suffix of the summary's file name (``<database><tag>.md``).
     seed : int
+    source : {"synthetic", "sim"}
+        Curves sampled on the models themselves (Section 4.3.4) or probed by the
+        simulated robot (Section 4.4: Tables 4.5-4.7).
+    experiments : tuple of str
+        With ``source="sim"``: "catalog" (Tables 4.6-4.7: the ten objects, 3 x 21 points
+        at 1.2 mm, recognised against the catalog database) and/or "solids" (Table 4.5:
+        the four solids of Fig. 4.15, n = 41 at 0.05 mm, against their closed forms).
+    sessions : int
+        With ``source="sim"``: probing sessions (seeds) per object.
+    objects : tuple of str or None
+        With ``source="sim"``: probe only these objects.
+    sim_curves : {"sensed", "true_contacts"}
+        With ``source="sim"``: recognise the sensed points (the experiment) or the
+        simulator's true contact points (no sensor error); the other set is recognised
+        as the instance's reference either way.
     """
 
     methods: tuple[str, ...] = METHODS
@@ -95,8 +115,13 @@ class Config:
     out_dir: Path = ROOT / "docs" / "benchmarks"
     tag: str = ""
     seed: int = 0
+    source: str = "synthetic"
+    experiments: tuple[str, ...] = EXPERIMENTS
+    sessions: int = 3
+    objects: tuple[str, ...] | None = None
+    sim_curves: str = "sensed"
 
-    def source(self, **overrides) -> bench.SyntheticSource:
+    def synthetic_source(self, **overrides) -> bench.SyntheticSource:
         return bench.SyntheticSource(
             per_model=self.per_model,
             n_points=overrides.get("n_points", self.n_points),
@@ -167,12 +192,14 @@ def machine() -> str:
 
 def run(config: Config) -> dict:
     """Run the benchmark (or a sweep); write records, summary JSON and Markdown."""
+    if config.source == "sim":
+        return run_sim(config)
     database, name = load_database(config)
     directory = database.directory
     started = time.strftime("%Y-%m-%d %H:%M")
     if config.sweep:
         return _run_sweep(config, database, name, directory, started)
-    source, registration = config.source(), config.registration()
+    source, registration = config.synthetic_source(), config.registration()
     path = _results_path(config, name, source, registration)
     records = bench.run(
         directory,
@@ -192,6 +219,413 @@ def run(config: Config) -> dict:
     out.write_text(text)
     print(text)
     return summary
+
+
+def run_sim(config: Config) -> dict:
+    """The simulated robot experiments (thesis Section 4.4); returns the summary per method.
+
+    "catalog": every catalog object probed ``sessions`` times, recognised against the
+    catalog database with ``methods`` (Tables 4.6-4.7 analogue). "solids": the four
+    solids of Fig. 4.15 probed ``sessions`` times, recognised against their closed-form
+    models (Table 4.5 analogue, method ``closed-form``).
+    """
+    from tactile_sim.experiments import catalog_experiment, solids_experiment
+
+    started = time.strftime("%Y-%m-%d %H:%M")
+    summary: dict = {}
+    for experiment in config.experiments:
+        make = catalog_experiment if experiment == "catalog" else solids_experiment
+        source = make(
+            sessions_per_object=config.sessions, curves=config.sim_curves, seed=config.seed
+        )
+        if config.objects is not None:
+            kept = tuple(o for o in source.objects if o in config.objects)
+            if not kept:
+                continue
+            source = replace(source, objects=kept)
+        if experiment == "catalog":
+            from tactile_sim.objects.database import catalog_database
+
+            database = catalog_database()
+            handle, names = database.directory, database.names
+            registration = config.registration()
+            methods = config.methods
+        else:
+            database = handle = bench.ClosedFormModels()
+            names = database.names
+            registration = SolidExperiment().config()
+            methods = (bench.CLOSED_FORM_METHOD,)
+        specs = source.specs(database)
+        thesis_keys = {
+            s.key
+            for s in sorted(specs, key=lambda s: (s.index, s.model))[
+                : config.thesis_instances or len(specs)
+            ]
+        }
+        jobs = [
+            bench.Job(
+                spec,
+                source,
+                tuple(m for m in methods if m != "thesis" or spec.key in thesis_keys),
+                registration,
+            )
+            for spec in specs
+        ]
+        name = f"sim_{experiment}"
+        path = _results_path(config, name, source, registration, config.tag)
+        records = bench.run(
+            handle,
+            jobs,
+            path,
+            workers=config.workers,
+            backend=config.backend,
+            ray_address=config.ray_address,
+        )
+        wanted = {(j.spec.key, m) for j in jobs for m in j.methods}
+        key = bench.settings_key(source, registration)
+        records = [
+            r
+            for r in records
+            if (r["instance"], r["method"]) in wanted and r.get("settings") == key
+        ]
+        found = bench.summarize(records)
+        summary |= found
+        out = Path(config.out_dir)
+        out.mkdir(parents=True, exist_ok=True)
+        figure = out / f"{name}{config.tag}.png"
+        if experiment == "catalog":
+            text = _sim_catalog_markdown(config, source, names, records, found, started, path)
+            _sim_catalog_figure(records, names, figure)
+        else:
+            text = _sim_solids_markdown(config, source, names, records, found, started, path)
+            _sim_solids_figure(records, names, figure)
+        text += f"\n![{name}]({figure.name})\n"
+        (out / f"{name}{config.tag}.md").write_text(text)
+        print(text)
+    if config.json_path:
+        _write_json(config.json_path, summary)
+    return summary
+
+
+def _header(config, title, source, started, path) -> list[str]:
+    return [
+        f"# {title}",
+        "",
+        f"Command: `python scripts/benchmark.py {' '.join(sys.argv[1:])}`  ",
+        f"Date: {started}; machine: {machine()}; workers: {config.workers} ({config.backend}).  ",
+        f"Probing: {len(source.objects)} objects x {source.sessions_per_object} sessions "
+        f"(seeds from --seed {source.seed}); {source.n_points} points per curve at "
+        f"d = {source.spacing_m * 1e3:g} mm, planes {source.plane_angle_deg:g} deg apart; "
+        f"recognised from the {source.curves.replace('_', ' ')} points, and from the "
+        f"{'true contact' if source.curves == 'sensed' else 'sensed'} points of the same "
+        f"session as the reference. Records: `{_shown(path)}`.",
+        "",
+    ]
+
+
+def _summary_table(summary) -> str:
+    return markdown_table(
+        [
+            "method",
+            "instances",
+            "success %",
+            "reference success %",
+            "median time s",
+            "p90 time s",
+            "median localisation error mm",
+        ],
+        [
+            [
+                m,
+                s["instances"],
+                100 * s["success_rate"],
+                100 * s["reference_success_rate"] if "reference_success_rate" in s else None,
+                s["median_time_s"],
+                s["p90_time_s"],
+                s["median_localization_error_mm"],
+            ]
+            for m, s in summary.items()
+        ],
+        digits=4,
+    )
+
+
+def _matrix(first: dict, names: list[str], field: str, bold_min: bool, thesis=None) -> str:
+    """Rows: models, columns: objects (thesis layout); the column minimum in bold."""
+    columns = [o for o in names if o in first]
+    rows = []
+    for m in names:
+        row = [m]
+        for o in columns:
+            value = first[o][field].get(m)
+            cell = "-" if value is None else f"{value:.3g}"
+            if thesis is not None:
+                cell += f" ({thesis[o][m]:.3f})"
+            finite = {k: v for k, v in first[o][field].items() if v is not None}
+            if bold_min and value is not None and m == min(finite, key=finite.get):
+                cell = f"**{cell}**"
+            row.append(cell)
+        rows.append(row)
+    return markdown_table(["model \\ object", *columns], rows)
+
+
+def _instance_rows(records, method) -> list[list]:
+    rows = []
+    for r in sorted(
+        (r for r in records if r["method"] == method), key=lambda r: (r["model"], r["index"])
+    ):
+        errors = {k: v for k, v in r.get("errors_mm", {}).items() if v is not None}
+        own = errors.get(r["model"])
+        others = [v for k, v in errors.items() if k != r["model"]]
+        ref = r.get("reference", {})
+        rows.append(
+            [
+                r["instance"],
+                r["seed"],
+                str(r["recognized"]),
+                own,
+                (min(others) - own) if own is not None and others else None,
+                r["localization_error_mm"],
+                str(ref.get("recognized")) if ref else "-",
+                ref.get("localization_error_mm") if ref else None,
+                r.get("sensed_error_mean_mm"),
+                r.get("sensed_error_max_mm"),
+                (
+                    f"{r['spacing_mean_mm']:.3f} +- {r['spacing_std_mm']:.3f}"
+                    if "spacing_mean_mm" in r
+                    else "-"
+                ),
+                len(r.get("truncated", [])) if "error" not in r else r["error"],
+                r.get("probe_time_s"),
+                r["time_s"],
+            ]
+        )
+    return rows
+
+
+_INSTANCE_HEADER = [
+    "instance",
+    "seed",
+    "recognised",
+    "own error mm",
+    "margin mm",
+    "localisation error mm",
+    "recognised (reference)",
+    "localisation error (reference) mm",
+    "sensed error mean mm",
+    "sensed error max mm",
+    "spacing mm",
+    "truncated sides",
+    "probing s",
+    "recognition s",
+]
+
+
+def _confusion(records, method, names) -> str:
+    confusion: dict = {}
+    for r in records:
+        if r["method"] == method:
+            row = confusion.setdefault(r["model"], {})
+            row[str(r["recognized"])] = row.get(str(r["recognized"]), 0) + 1
+    labels = [*names, "None"]
+    return markdown_table(
+        ["object", *labels],
+        [[o, *[confusion.get(o, {}).get(c, 0) for c in labels]] for o in names if o in confusion],
+    )
+
+
+def _sim_catalog_markdown(config, source, names, records, summary, started, path) -> str:
+    lines = _header(
+        config,
+        "Simulated robot experiment on the catalog: Tables 4.6 and 4.7 analogue",
+        source,
+        started,
+        path,
+    )
+    lines += [
+        f"Lookup tolerance delta = {config.delta_per_mm} 1/mm; thesis mode on the first "
+        f"{config.thesis_instances or 'all'} instances. 'reference': the same sessions "
+        "recognised from the other point set (see above).",
+        "",
+        "## Summary",
+        "",
+        _summary_table(summary),
+    ]
+    method = "fast" if "fast" in summary else next(iter(summary), None)
+    if method is None:
+        return "\n".join(lines) + "\n"
+    first = {
+        r["model"]: r
+        for r in records
+        if r["method"] == method and r["index"] == 0 and r.get("errors_mm")
+    }
+    lines += [
+        "",
+        f"## Table 4.6 analogue: registration errors (mm), {method}, session 0 of each "
+        "object (columns: object, rows: model; '-' rejected at table lookup; column "
+        "minimum in bold)",
+        "",
+        _matrix(first, names, "errors_mm", bold_min=True),
+        "",
+        f"## Table 4.7 analogue: registration times (s), {method}, same sessions",
+        "",
+        _matrix(first, names, "times_s", bold_min=False),
+        "",
+        "Recognition time (all models, local geometry included): "
+        + ", ".join(f"{o} {first[o]['time_s']:.3g} s" for o in names if o in first)
+        + ".",
+        "",
+        f"## Confusion ({method}, all sessions; rows: object, columns: recognised)",
+        "",
+        _confusion(records, method, names),
+        "",
+        f"## Sessions ({method})",
+        "",
+        markdown_table(_INSTANCE_HEADER, _instance_rows(records, method), digits=3),
+    ]
+    return "\n".join(lines) + "\n"
+
+
+def _sim_solids_markdown(config, source, names, records, summary, started, path) -> str:
+    experiment = SolidExperiment()
+    lines = _header(
+        config,
+        "Simulated robot experiment on the Fig. 4.15 solids: Table 4.5 analogue",
+        source,
+        started,
+        path,
+    )
+    method = bench.CLOSED_FORM_METHOD
+    lines += [
+        f"Registration onto the four closed-form models (thesis Section 4.2.2), table "
+        f"lookup tolerance {experiment.delta_per_m} 1/m, {experiment.max_candidates} "
+        "candidates. The thesis's values are in brackets.",
+        "",
+        "## Summary",
+        "",
+        _summary_table(summary),
+    ]
+    first = {
+        r["model"]: r
+        for r in records
+        if r["method"] == method and r["index"] == 0 and r.get("errors_mm")
+    }
+    diagonal = [
+        o for o in first if min(_finite(first[o]["errors_mm"]), key=first[o]["errors_mm"].get) == o
+    ]
+    lines += [
+        "",
+        "## Table 4.5 analogue: minimum registration error (mm), session 0 of each solid "
+        "(columns: object, rows: model; column minimum in bold)",
+        "",
+        _matrix(first, names, "errors_mm", bold_min=True, thesis=TABLE_4_5_THESIS["min_error_mm"]),
+        "",
+        f"Columns whose minimum is on the diagonal: {len(diagonal)} / {len(first)}.",
+    ]
+    if source.sessions_per_object > 1:
+        lines += [
+            "",
+            "## Every session: registration errors (mm)",
+            "",
+            markdown_table(
+                ["instance", *names, "recognised"],
+                [
+                    [r["instance"], *[r["errors_mm"].get(m) for m in names], str(r["recognized"])]
+                    for r in sorted(records, key=lambda r: (r["model"], r["index"]))
+                    if r["method"] == method
+                ],
+                digits=3,
+            ),
+        ]
+    lines += [
+        "",
+        "## Confusion (all sessions; rows: object, columns: recognised)",
+        "",
+        _confusion(records, method, names),
+        "",
+        "## Sessions",
+        "",
+        markdown_table(_INSTANCE_HEADER, _instance_rows(records, method), digits=3),
+    ]
+    return "\n".join(lines) + "\n"
+
+
+def _finite(errors: dict) -> dict:
+    return {k: v for k, v in errors.items() if v is not None}
+
+
+def _pyplot():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def _error_image(ax, first, names, title):
+    columns = [o for o in names if o in first]
+    matrix = np.array(
+        [[first[o]["errors_mm"].get(m) or np.nan for o in columns] for m in names], dtype=float
+    )
+    image = ax.imshow(np.log10(matrix), cmap="viridis")
+    ax.set_xticks(range(len(columns)), columns, rotation=60, ha="right")
+    ax.set_yticks(range(len(names)), names)
+    for j, o in enumerate(columns):
+        finite = _finite(first[o]["errors_mm"])
+        if finite:
+            i = names.index(min(finite, key=finite.get))
+            ax.add_patch(_plt_rectangle(j, i))
+    ax.set(xlabel="object", ylabel="model", title=title)
+    return image
+
+
+def _plt_rectangle(j, i):
+    from matplotlib.patches import Rectangle
+
+    return Rectangle((j - 0.5, i - 0.5), 1, 1, fill=False, edgecolor="red", linewidth=2)
+
+
+def _sim_catalog_figure(records, names, path: Path) -> None:
+    plt = _pyplot()
+    method = "fast" if any(r["method"] == "fast" for r in records) else records[0]["method"]
+    rs = sorted(
+        (r for r in records if r["method"] == method), key=lambda r: (r["model"], r["index"])
+    )
+    first = {r["model"]: r for r in rs if r["index"] == 0 and r.get("errors_mm")}
+    fig, ax = plt.subplots(1, 2, figsize=(12, 5))
+    image = _error_image(ax[0], first, names, f"log10 registration error mm ({method}, session 0)")
+    fig.colorbar(image, ax=ax[0], shrink=0.8)
+    x = np.arange(len(rs))
+    sensed = [r["localization_error_mm"] or np.nan for r in rs]
+    reference = [(r.get("reference") or {}).get("localization_error_mm") or np.nan for r in rs]
+    ax[1].semilogy(x, sensed, "o", label=f"{rs[0].get('curves', 'data')} points" if rs else "")
+    ax[1].semilogy(x, reference, "x", label="reference points")
+    for k, r in enumerate(rs):
+        if not r["success"]:
+            ax[1].axvline(k, color="red", alpha=0.3)
+    ax[1].set_xticks(x, [r["instance"] for r in rs], rotation=90, fontsize=7)
+    ax[1].set(ylabel="localisation error mm", title="localisation error per session")
+    ax[1].legend()
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def _sim_solids_figure(records, names, path: Path) -> None:
+    plt = _pyplot()
+    method = bench.CLOSED_FORM_METHOD
+    first = {
+        r["model"]: r
+        for r in records
+        if r["method"] == method and r["index"] == 0 and r.get("errors_mm")
+    }
+    fig, ax = plt.subplots(figsize=(6, 5))
+    image = _error_image(ax, first, names, "log10 minimum registration error mm (session 0)")
+    fig.colorbar(image, ax=ax, shrink=0.8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
 
 
 def _shown(path: Path) -> Path:
@@ -343,7 +777,10 @@ def _run_sweep(config, database, name, directory, started) -> dict:
             overrides["n_points"] = round(value / config.spacing_mm) + 1
         else:
             overrides[parameter] = value
-        source, registration = config.source(**overrides), config.registration(**overrides)
+        source, registration = (
+            config.synthetic_source(**overrides),
+            config.registration(**overrides),
+        )
         path = _results_path(config, name, source, registration, f"_sweep_{config.sweep}")
         jobs = _jobs(database, config, ("fast",), source, registration)
         records = bench.run(
@@ -417,7 +854,28 @@ def parse_args(argv=None) -> Config:
     p.add_argument("--out-dir", type=Path, default=ROOT / "docs" / "benchmarks")
     p.add_argument("--tag", default="", help="suffix of the summary file name")
     p.add_argument("--seed", type=int, default=0)
+    p.add_argument(
+        "--source", choices=SOURCES, default="synthetic", help="synthetic curves or the robot"
+    )
+    p.add_argument(
+        "--experiment",
+        action="append",
+        choices=EXPERIMENTS,
+        help="with --source sim: catalog (Tables 4.6-4.7) and/or solids (Table 4.5)",
+    )
+    p.add_argument("--sessions", type=int, default=3, help="with --source sim: seeds per object")
+    p.add_argument("--object", action="append", help="with --source sim: probe only these")
+    p.add_argument(
+        "--sim-curves",
+        choices=("sensed", "true_contacts"),
+        default="sensed",
+        help="with --source sim: recognise the sensed or the true contact points",
+    )
     a = p.parse_args(argv)
+    if a.sessions < 1:
+        p.error("--sessions must be at least 1")
+    if a.source == "sim" and (a.mesh_dir is not None or a.sweep is not None):
+        p.error("--mesh-dir and --sweep apply to --source synthetic only")
     for name in ("per_model", "n_points", "workers"):
         if getattr(a, name) < 1:
             p.error(f"--{name.replace('_', '-')} must be at least 1")
@@ -443,7 +901,13 @@ def parse_args(argv=None) -> Config:
         results=a.results,
         json_path=a.json_path,
         out_dir=a.out_dir,
+        tag=a.tag,
         seed=a.seed,
+        source=a.source,
+        experiments=tuple(a.experiment) if a.experiment else EXPERIMENTS,
+        sessions=a.sessions,
+        objects=tuple(a.object) if a.object else None,
+        sim_curves=a.sim_curves,
     )
 
 
