@@ -77,6 +77,7 @@ from tactile_sim.sensor import (
     ground_truth_contact,
     sweep_contacts,
 )
+from tactile_sim.trajectory import Trajectory, TrajectoryRecorder
 
 __all__ = [
     "ContourTrace",
@@ -320,6 +321,8 @@ class SweepResult:
         Ground truth: closest points of the original mesh to the true tip centres.
     stylus_contacts : (n,) int
         Ground truth: contacts of the shaft or housing at each reading (should be 0).
+    reading_times_s : (n,) float, seconds
+        Simulated time of each point's reading.
     """
 
     plane: SamplingPlane
@@ -331,6 +334,7 @@ class SweepResult:
     true_tip_centres_in_world: NDArray[np.float64]
     true_contact_points_in_world: NDArray[np.float64]
     stylus_contacts: NDArray[np.int64]
+    reading_times_s: NDArray[np.float64] = field(default_factory=lambda: np.empty(0))
 
     @property
     def truncated(self) -> bool:
@@ -396,6 +400,9 @@ class ProbeSession:
         was passed in).
     sim_seconds : float, seconds
         Simulated time.
+    trajectory : Trajectory or None
+        The rig's state sampled during the session (``probe_object(..., trajectory_hz=...)``);
+        None when it was not recorded.
     """
 
     object_name: str
@@ -409,6 +416,7 @@ class ProbeSession:
     wall_seconds: float
     build_seconds: float
     sim_seconds: float
+    trajectory: Trajectory | None = None
 
     @property
     def truncated(self) -> bool:
@@ -794,10 +802,13 @@ class _Rig:
         config: ProbingConfig,
         sensor: SensorConfig,
         rng: np.random.Generator,
+        recorder: TrajectoryRecorder | None = None,
     ) -> None:
         physics = probe_scene.physics
         self.physics = physics
         self.model, self.data = physics.model.ptr, physics.data.ptr
+        # Steps like mujoco.mj_step(model, data[, nstep]); the recorder samples on the way.
+        self._step = mujoco.mj_step if recorder is None else recorder.step
         self.config = config
         self.sensor = sensor
         self.reader = SensorReader(physics, sensor.noise, rng)
@@ -836,7 +847,7 @@ class _Rig:
 
     def settle(self, seconds: float) -> None:
         n = max(1, round(seconds / self.dt))
-        mujoco.mj_step(self.model, self.data, n)
+        self._step(self.model, self.data, n)
         self._check()
 
     def move(self, tip_in_world: NDArray[np.float64], speed: float) -> None:
@@ -851,10 +862,10 @@ class _Rig:
         tau = np.arange(1, n + 1) / n
         profile = tau**3 * (10.0 - 15.0 * tau + 6.0 * tau**2)
         path = q0 + profile[:, None] * (q1 - q0)
-        model, data, actuators = self.model, self.data, self.actuators
+        model, data, actuators, step = self.model, self.data, self.actuators, self._step
         for q in path:
             data.ctrl[actuators] = q
-            mujoco.mj_step(model, data)
+            step(model, data)
         self.q_command = np.array(q1, dtype=np.float64)
         self._check()
 
@@ -893,6 +904,7 @@ class _Rig:
         )
         path = q0 + np.minimum(covered / travel, 1.0)[:, None] * (q1 - q0)
         model, data, actuators, raw = self.model, self.data, self.actuators, self.reader.raw
+        step = self._step
         count = 0
         streak_start = q0
         previous = q0
@@ -906,7 +918,7 @@ class _Rig:
         self.first_contact = None
         for i, q in enumerate(path):
             data.ctrl[actuators] = q
-            mujoco.mj_step(model, data)
+            step(model, data)
             values = raw()
             recent_axial[i % len(recent_axial)] = values[6]
             axial = sum(recent_axial) / len(recent_axial)
@@ -1003,7 +1015,7 @@ class _Rig:
         n = max(1, round(self.config.reading_average_s / self.dt))
         total = np.zeros(7)
         for _ in range(n):
-            mujoco.mj_step(self.model, self.data)
+            self._step(self.model, self.data)
             total += self.reader.raw()
         self._check()
         mean = total / n
@@ -1204,6 +1216,7 @@ def _sweep_result(
         true_tip_centres_in_world=true_tips,
         true_contact_points_in_world=true_contacts,
         stylus_contacts=np.array([s.stylus_contacts for s in samples], dtype=np.int64),
+        reading_times_s=np.array([s.estimate.reading.time_s for s in samples]),
     )
 
 
@@ -1274,6 +1287,7 @@ def probe_object(
     sensor: SensorConfig | None = None,
     probe_scene: ProbeScene | None = None,
     progress: bool = True,
+    trajectory_hz: float | None = None,
 ) -> ProbeSession:
     """Probes an object along three sampling planes through one point; returns the curves.
 
@@ -1308,6 +1322,10 @@ def probe_object(
         (its pose wins over ``T_world_from_object``); None builds one.
     progress : bool
         Announce cold builds (meshes, hulls) with progress bars.
+    trajectory_hz : float or None, 1/s
+        Sample the rig's state (body poses, tip, deflection, force) at this rate of
+        simulated time into ``ProbeSession.trajectory``, e.g. for a recording
+        (:mod:`tactile_sim.recording`); None records nothing.
 
     Returns
     -------
@@ -1364,7 +1382,10 @@ def probe_object(
         planes = sampling_planes(p_world, yaw, plane_angle)
         line_point = origin.copy()
         probe_scene.physics.reset()
-        rig = _Rig(probe_scene, config, sensor, rng)
+        recorder = None
+        if trajectory_hz is not None:
+            recorder = TrajectoryRecorder(probe_scene.physics, trajectory_hz)
+        rig = _Rig(probe_scene, config, sensor, rng, recorder)
         runner = _SweepRunner(rig, config, spacing_m, config.max_tilt_deg)
         sweeps = tuple(
             _sweep(runner, probe_scene, plane, line_point, n_points, first=(k == 0))
@@ -1408,6 +1429,7 @@ def probe_object(
         wall_seconds=time.perf_counter() - wall_start,
         build_seconds=build_seconds,
         sim_seconds=float(probe_scene.physics.data.time),
+        trajectory=None if recorder is None else recorder.trajectory(),
     )
 
 
