@@ -3,6 +3,7 @@
 python scripts/reproduce_thesis.py --table 3.3 --json out/table_3_3.json
 python scripts/reproduce_thesis.py --table 4.2 --table 4.3 --json out/chapter4.json
 python scripts/reproduce_thesis.py --table all --figures docs/figures
+python scripts/reproduce_thesis.py --table 3.4 --source sim --json docs/results/table_3_4_sim.json
 """
 
 from __future__ import annotations
@@ -18,8 +19,13 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from recognition.errors import RecognitionError
 from recognition.reproduction import chapter3, chapter4_closed_form
+from tactile_sim.errors import SimulationError
 
 TABLES = ("3.1", "3.2", "3.3", "3.4", "3.5", "recognition", "fig4.5", "4.2", "4.3", "4.5")
+#: Tables with a simulated-robot source (``--source sim``).
+SIM_TABLES = ("3.4",)
+#: Largest relative error (%) of a and b accepted for Table 3.4 from simulated points.
+TABLE_3_4_SIM_TOLERANCE_PERCENT = 2.0
 
 
 @dataclass(frozen=True)
@@ -41,6 +47,12 @@ class Config:
         Worker processes (default: all cores) for Table 3.3, the recognition rates and
         the 40 recognition tests of Tables 4.2-4.3.
     seed : int
+    source : {"synthetic", "sim"}
+        Where the tactile points of Table 3.4 come from: sampled on the closed form with
+        joystick-like noise, or sensed by the simulated robot tracing the extruded
+        ellipse (thesis Section 3.4.2).
+    sim_trials : int
+        With ``source="sim"``: independent experiments (two traced arcs each).
     """
 
     tables: tuple[str, ...] = TABLES
@@ -49,6 +61,8 @@ class Config:
     curves: int = 100
     workers: int | None = None
     seed: int = 0
+    source: str = "synthetic"
+    sim_trials: int = 10
 
 
 def run(config: Config) -> list[chapter3.TableResult]:
@@ -74,6 +88,8 @@ def run(config: Config) -> list[chapter3.TableResult]:
                 result = chapter3.table_3_3(records, experiment)
             else:
                 result = chapter3.recognition_rates(records, experiment)
+        elif name == "3.4" and config.source == "sim":
+            result = table_3_4_sim(joystick, config)
         elif name == "3.4":
             result = chapter3.table_3_4(joystick)
         elif name == "3.5":
@@ -106,6 +122,58 @@ def run(config: Config) -> list[chapter3.TableResult]:
     return results
 
 
+def table_3_4_sim(joystick: chapter3.JoystickExperiment, config: Config):
+    """Table 3.4 from the simulated robot tracing the extruded ellipse (a = 25 mm,
+    b = 17.5 mm) in a horizontal plane: per trial two arcs of ``joystick.arc_length`` cm
+    at ``joystick.spacing`` cm from random start bearings, each with its own object pose
+    and sensor noise."""
+    from tactile_sim.experiments import TraceConfig, trace_outlines
+
+    trace = TraceConfig(
+        object_name="planar_ellipse",
+        trials=config.sim_trials,
+        arcs_per_trial=joystick.n_arcs,
+        arc_length_m=joystick.arc_length * 1e-2,
+        spacing_m=joystick.spacing * 1e-2,
+        seed=config.seed,
+    )
+    traces = trace_outlines(trace)
+    accuracy = traces.accuracy()
+    result = chapter3.table_3_4_from_points(
+        traces.arcs_in_world(),
+        joystick,
+        description=(
+            f"points sensed by the simulated robot tracing the extruded ellipse: "
+            f"{trace.arcs_per_trial} arcs of {trace.arc_length_m * 1e2:g} cm per trial, "
+            f"a point every {trace.spacing_m * 1e3:g} mm (in-plane distance of the sensed "
+            f"points to the ellipse: mean {accuracy['distance_to_outline_mean_mm']:.3f} mm, "
+            f"max {accuracy['distance_to_outline_max_mm']:.3f} mm)"
+        ),
+    )
+    errors = result.measured["mean_relative_error_percent"]
+    result.measured["source"] = "sim"
+    result.measured["sensing"] = accuracy
+    result.measured["within_tolerance"] = bool(
+        max(errors.values()) <= TABLE_3_4_SIM_TOLERANCE_PERCENT
+    )
+    result.measured["tolerance_percent"] = TABLE_3_4_SIM_TOLERANCE_PERCENT
+    result.settings["trace"] = {
+        "object_name": trace.object_name,
+        "trials": trace.trials,
+        "arcs_per_trial": trace.arcs_per_trial,
+        "arc_length_m": trace.arc_length_m,
+        "spacing_m": trace.spacing_m,
+        "seed": trace.seed,
+        "start_bearings": "random per arc",
+    }
+    return replace(
+        result,
+        markdown=result.markdown + f"\n\nSimulated probe: {accuracy['points']} points in "
+        f"{accuracy['wall_seconds']:.1f} s of tracing; a and b within "
+        f"{TABLE_3_4_SIM_TOLERANCE_PERCENT:g} %: {result.measured['within_tolerance']}.",
+    )
+
+
 def parse_args(argv=None) -> Config:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument(
@@ -121,18 +189,42 @@ def parse_args(argv=None) -> Config:
     parser.add_argument("--curves", type=int, default=100, help="random curves per class")
     parser.add_argument("--workers", type=int, default=None, help="worker processes")
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument(
+        "--source",
+        choices=("synthetic", "sim"),
+        default="synthetic",
+        help=f"tactile points sampled on the closed form or sensed by the simulated robot "
+        f"(tables {', '.join(SIM_TABLES)})",
+    )
+    parser.add_argument("--sim-trials", type=int, default=10, help="with --source sim: experiments")
     args = parser.parse_args(argv)
     tables = TABLES if not args.table or "all" in args.table else tuple(args.table)
-    if args.curves < 1:
-        parser.error("--curves must be at least 1")
-    return Config(tables, args.json, args.figures, args.curves, args.workers, args.seed)
+    if args.source == "sim":
+        tables = SIM_TABLES if not args.table or "all" in args.table else tables
+        others = [t for t in tables if t not in SIM_TABLES]
+        if others:
+            parser.error(
+                f"--source sim applies to table {', '.join(SIM_TABLES)} only, not {others}"
+            )
+    if args.curves < 1 or args.sim_trials < 1:
+        parser.error("--curves and --sim-trials must be at least 1")
+    return Config(
+        tables,
+        args.json,
+        args.figures,
+        args.curves,
+        args.workers,
+        args.seed,
+        args.source,
+        args.sim_trials,
+    )
 
 
 def main(argv=None) -> int:
     config = parse_args(argv)
     try:
         run(config)
-    except (RecognitionError, ValueError, OSError) as exc:
+    except (RecognitionError, SimulationError, ValueError, OSError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
     return 0

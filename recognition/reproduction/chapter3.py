@@ -24,7 +24,7 @@ from recognition.curves.recognition import (
     recognize_curve,
 )
 from recognition.curves.sampling import random_curve, random_rigid_motion, sample_by_arc_length
-from recognition.errors import RecognitionError
+from recognition.errors import InvalidCurveData, RecognitionError
 from recognition.reproduction.tables import TableResult, markdown_table
 
 __all__ = [
@@ -32,12 +32,14 @@ __all__ = [
     "CurveExperiment",
     "JoystickExperiment",
     "classify_random_curves",
+    "ellipse_arc_estimates",
     "figures",
     "recognition_rates",
     "table_3_1",
     "table_3_2",
     "table_3_3",
     "table_3_4",
+    "table_3_4_from_points",
     "table_3_5",
 ]
 
@@ -555,18 +557,27 @@ TABLE_3_4_THESIS = {
 }
 
 
-def joystick_ellipse_estimates(experiment: JoystickExperiment, trial: int) -> LocalGeometry:
-    """Estimates at ``estimates_per_arc`` points on each of ``n_arcs`` noisy ellipse arcs."""
-    rng = _rng(experiment.seed, 34, trial)
-    curve = CanonicalCurve(CurveKind.ELLIPSE, (experiment.a, experiment.b))
+def ellipse_arc_estimates(arcs, experiment: JoystickExperiment) -> LocalGeometry:
+    """kappa and kappa_s at ``estimates_per_arc`` points on each arc (thesis Section 3.4.2).
+
+    Parameters
+    ----------
+    arcs : sequence of (n_i, 2) float
+        Ordered points along arcs of one ellipse, in the experiment's units (cm), each
+        arc in its own frame.
+    experiment : JoystickExperiment
+        The estimator's settings (``window``, ``degree``, ``kappa_window``).
+
+    Returns
+    -------
+    LocalGeometry
+        The estimates of all arcs concatenated, |kappa| (each arc may be traversed
+        either way).
+    """
     parts = []
-    for _ in range(experiment.n_arcs):
-        t0 = rng.uniform(0.0, 2 * np.pi)
-        # parameter span of the requested arc length, from the local speed
-        span = experiment.arc_length / float(curve.speed(t0 + np.linspace(0, 1, 5)).mean())
-        sampled = _sample(curve, t0, t0 + span, experiment, rng)
+    for points in arcs:
         g = local_fit_geometry(
-            sampled.points,
+            np.asarray(points, dtype=float),
             window=experiment.window,
             degree=experiment.degree,
             kappa_window=experiment.kappa_window,
@@ -580,6 +591,19 @@ def joystick_ellipse_estimates(experiment: JoystickExperiment, trial: int) -> Lo
     return LocalGeometry(np.arange(n), np.zeros((n, 2)), np.zeros(n), np.zeros(n), kappa, cat[1])
 
 
+def joystick_ellipse_estimates(experiment: JoystickExperiment, trial: int) -> LocalGeometry:
+    """Estimates at ``estimates_per_arc`` points on each of ``n_arcs`` noisy ellipse arcs."""
+    rng = _rng(experiment.seed, 34, trial)
+    curve = CanonicalCurve(CurveKind.ELLIPSE, (experiment.a, experiment.b))
+    arcs = []
+    for _ in range(experiment.n_arcs):
+        t0 = rng.uniform(0.0, 2 * np.pi)
+        # parameter span of the requested arc length, from the local speed
+        span = experiment.arc_length / float(curve.speed(t0 + np.linspace(0, 1, 5)).mean())
+        arcs.append(_sample(curve, t0, t0 + span, experiment, rng).points)
+    return ellipse_arc_estimates(arcs, experiment)
+
+
 def table_3_4(experiment: JoystickExperiment = JoystickExperiment()) -> TableResult:
     """Table 3.4: I_c1, I_c2, a, b of an ellipse from noisy joystick-like samples.
 
@@ -587,7 +611,56 @@ def table_3_4(experiment: JoystickExperiment = JoystickExperiment()) -> TableRes
     on trial 0. The recognition tree's estimate (one least-squares fit over all the
     estimates) is averaged over ``trials`` independent experiments.
     """
-    g = joystick_ellipse_estimates(experiment, 0)
+    estimates = [joystick_ellipse_estimates(experiment, t) for t in range(experiment.trials)]
+    description = (
+        f"joystick-like samples: {experiment.n_arcs} arcs of {experiment.arc_length} cm, "
+        f"points every {experiment.spacing} cm with noise sigma {experiment.noise_std} cm"
+    )
+    return _table_3_4(estimates, experiment, description, asdict(experiment))
+
+
+def table_3_4_from_points(
+    trial_arcs_m, experiment: JoystickExperiment = JoystickExperiment(), *, description: str = ""
+) -> TableResult:
+    """Table 3.4 from measured tactile points (e.g. the simulated probe's).
+
+    Parameters
+    ----------
+    trial_arcs_m : sequence of sequence of (n, 2) float, metres
+        Per independent experiment (trial), the ordered points of each traced arc of the
+        ellipse with a = ``experiment.a``, b = ``experiment.b`` (cm), in any frame.
+    experiment : JoystickExperiment
+        The estimator's settings and the true a, b; its sampling fields are not used.
+    description : str
+        How the points were measured (for the Markdown).
+
+    Returns
+    -------
+    TableResult
+        As :func:`table_3_4`: pairwise invariants (3.19)-(3.20) of trial 0, and the
+        recognition tree's (a, b) over all trials; ``measured["source"]`` is "points".
+    """
+    if len(trial_arcs_m) == 0:
+        raise InvalidCurveData("table_3_4_from_points needs at least one trial of arcs")
+    estimates = [
+        ellipse_arc_estimates([100.0 * np.asarray(arc) for arc in arcs], experiment)
+        for arcs in trial_arcs_m
+    ]
+    settings = asdict(experiment)
+    settings["trials"] = len(estimates)
+    for name in ("spacing", "noise_std", "arc_length", "n_arcs"):
+        settings.pop(name)
+    settings["arcs_per_trial"] = [len(arcs) for arcs in trial_arcs_m]
+    settings["points_per_arc"] = [[len(arc) for arc in arcs] for arcs in trial_arcs_m]
+    result = _table_3_4(estimates, experiment, description or "measured tactile points", settings)
+    result.measured["source"] = "points"
+    return result
+
+
+def _table_3_4(
+    estimates: list[LocalGeometry], experiment: JoystickExperiment, description: str, settings
+) -> TableResult:
+    g = estimates[0]
     rng = _rng(experiment.seed, 341)
     i, j = _random_pairs(rng, len(g), experiment.n_pairs, g.kappa).T
     args = (g.kappa[i], g.kappa_s[i], g.kappa[j], g.kappa_s[j])
@@ -606,12 +679,12 @@ def table_3_4(experiment: JoystickExperiment = JoystickExperiment()) -> TableRes
         "b": _summary(ab[:, 1]),
     }
     fits = []
-    for trial in range(experiment.trials):
-        gt = joystick_ellipse_estimates(experiment, trial)
+    for gt in estimates:
         fit = fit_class(CurveKind.ELLIPSE, gt.kappa, gt.kappa_s)
         i_c1, i_c2, _ = inv.conic_invariants_regression(gt.kappa, gt.kappa_s)
         fits.append((*fit.params, i_c1, i_c2))
     fits = np.array(fits)
+    trials = len(estimates)
     tree = {
         "a_mean": float(fits[:, 0].mean()),
         "b_mean": float(fits[:, 1].mean()),
@@ -619,7 +692,7 @@ def table_3_4(experiment: JoystickExperiment = JoystickExperiment()) -> TableRes
         "b_stdev": float(fits[:, 1].std()),
         "I_c1_mean": float(fits[:, 2].mean()),
         "I_c2_mean": float(fits[:, 3].mean()),
-        "trials": experiment.trials,
+        "trials": trials,
     }
     rel = {
         "a": 100 * abs(tree["a_mean"] - experiment.a) / experiment.a,
@@ -633,7 +706,7 @@ def table_3_4(experiment: JoystickExperiment = JoystickExperiment()) -> TableRes
         rows.append([f"pairs {stat}", *(pairwise[k][stat] for k in ("I_c1", "I_c2", "a", "b"))])
     rows.append(
         [
-            f"tree, mean of {experiment.trials}",
+            f"tree, mean of {trials}",
             tree["I_c1_mean"],
             tree["I_c2_mean"],
             tree["a_mean"],
@@ -642,17 +715,16 @@ def table_3_4(experiment: JoystickExperiment = JoystickExperiment()) -> TableRes
     )
     rows.append(["tree, stdev", None, None, tree["a_stdev"], tree["b_stdev"]])
     text = (
-        f"**Table 3.4** ellipse a = {experiment.a}, b = {experiment.b} (cm) from joystick-like "
-        f"samples: {experiment.n_arcs} arcs of {experiment.arc_length} cm, points every "
-        f"{experiment.spacing} cm with noise sigma {experiment.noise_std} cm; fit over "
-        f"{experiment.window} points (degree {experiment.degree}), kappa_s over "
+        f"**Table 3.4** ellipse a = {experiment.a}, b = {experiment.b} (cm) from {description}; "
+        f"fit over {experiment.window} points (degree {experiment.degree}), kappa_s over "
         f"{experiment.kappa_window} estimates; {experiment.estimates_per_arc} estimates per "
         f"arc. 'pairs' summarises {experiment.n_pairs} pairwise invariants (3.19)-(3.20) of "
         "one experiment, as the thesis does; 'tree' is the recognition tree's least-squares "
-        f"shape over all estimates, averaged over {experiment.trials} experiments.\n\n"
+        f"shape over all estimates, averaged over {trials} experiments; a and b within "
+        f"{rel['a']:.2f} % and {rel['b']:.2f} % of the true values.\n\n"
         + markdown_table(header, rows)
     )
-    return TableResult("3.4", TABLE_3_4_THESIS, measured, asdict(experiment), text)
+    return TableResult("3.4", TABLE_3_4_THESIS, measured, settings, text)
 
 
 # --- Table 3.5 --------------------------------------------------------------------------
