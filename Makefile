@@ -6,8 +6,9 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 JOBS ?= 2
+CHROMIUM := /usr/bin/chromium
 
-.PHONY: demo test lint clean venv
+.PHONY: demo test lint clean venv chromium
 
 venv: $(STAMP)
 
@@ -20,7 +21,15 @@ $(STAMP): pyproject.toml
 demo: $(STAMP)
 	$(PY) scripts/reproduce_thesis.py --table all
 
-test: $(STAMP)
+# The web viewer test renders a recording in headless Chromium (Debian's package; CI is
+# Debian and runs as root).
+chromium:
+	@test -x $(CHROMIUM) || { \
+		export DEBIAN_FRONTEND=noninteractive; \
+		apt-get install -y chromium \
+		|| { apt-get update && apt-get install -y chromium; }; }
+
+test: $(STAMP) chromium
 	$(PY) -m ruff check .
 	$(PY) -m pytest -n $(JOBS)
 

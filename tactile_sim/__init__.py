@@ -5,11 +5,22 @@ them import them. :mod:`tactile_sim.objects` holds the catalog of the thesis's t
 free-form objects.
 """
 
-from tactile_sim.errors import AssetError, InvalidMesh, SimulationError, UnknownObject
+from tactile_sim.errors import (
+    AssetError,
+    InvalidMesh,
+    InvalidRecording,
+    PortInUse,
+    RecordingError,
+    SimulationError,
+    UnknownObject,
+)
 
 __all__ = [
     "AssetError",
     "InvalidMesh",
+    "InvalidRecording",
+    "PortInUse",
+    "RecordingError",
     "SimulationError",
     "UnknownObject",
 ]

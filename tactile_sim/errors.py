@@ -7,6 +7,9 @@ from collections.abc import Iterable
 __all__ = [
     "AssetError",
     "InvalidMesh",
+    "InvalidRecording",
+    "PortInUse",
+    "RecordingError",
     "SimulationError",
     "UnknownObject",
 ]
@@ -35,3 +38,24 @@ class InvalidMesh(SimulationError, ValueError):
 
 class AssetError(SimulationError, OSError):
     """An asset file (object recipe, generated cache) is missing, malformed or unreadable."""
+
+
+class RecordingError(SimulationError):
+    """A rerun recording could not be written, read or shown (the viewer failed to start)."""
+
+
+class InvalidRecording(RecordingError, ValueError):
+    """A recording file is missing, truncated or not an .rrd file."""
+
+
+class PortInUse(RecordingError, OSError):
+    """A port the viewer needs is taken; the message names a free alternative."""
+
+    def __init__(self, port: int, option: str, alternative: int) -> None:
+        self.port = port
+        self.option = option
+        self.alternative = alternative
+        super().__init__(f"port {port} in use; pass {option} {alternative}")
+
+    def __str__(self) -> str:
+        return str(self.args[0])

@@ -187,19 +187,16 @@ class TrajectoryRecorder:
         adr = int(model.sensor_adr[force])
         self._force = slice(adr, adr + 3)
         self._countdown = self.every_steps
-        self._steps: list[int] = []
         self._xpos: list[NDArray[np.float64]] = []
         self._xquat: list[NDArray[np.float64]] = []
         self._tips: list[NDArray[np.float64]] = []
         self._qpos: list[NDArray[np.float64]] = []
         self._forces: list[NDArray[np.float64]] = []
-        self._step_count = 0
-        self.sample()
+        self._sample()
 
-    def sample(self) -> None:
-        """Stores the current state."""
+    def _sample(self) -> None:
+        """Stores the current state (every ``every_steps`` steps, from step 0)."""
         data = self._data
-        self._steps.append(self._step_count)
         self._xpos.append(data.xpos.copy())
         self._xquat.append(data.xquat.copy())
         self._tips.append(data.site_xpos[self._tip_site].copy())
@@ -208,21 +205,24 @@ class TrajectoryRecorder:
 
     def step(self, model: mujoco.MjModel, data: mujoco.MjData, nstep: int = 1) -> None:
         """Advances the simulation by ``nstep`` timesteps, sampling on the way."""
+        if nstep < self._countdown:
+            mujoco.mj_step(model, data, nstep)
+            self._countdown -= nstep
+            return
         while nstep > 0:
             n = min(nstep, self._countdown)
             mujoco.mj_step(model, data, n)
             nstep -= n
-            self._step_count += n
             self._countdown -= n
             if self._countdown == 0:
-                self.sample()
+                self._sample()
                 self._countdown = self.every_steps
 
     def trajectory(self) -> Trajectory:
         """Returns the samples taken so far."""
         model, data = self._model, self._data
         xpos, xquat = np.array(self._xpos), np.array(self._xquat)
-        steps = np.array(self._steps, dtype=np.int64)
+        steps = self.every_steps * np.arange(len(self._xpos), dtype=np.int64)
         return Trajectory(
             timestep_s=self.timestep_s,
             steps=steps,

@@ -1,0 +1,79 @@
+"""Open a saved probing recording (.rrd) in rerun's native viewer or serve it to a browser.
+
+python scripts/replay.py runs/20260101-120000_cat_seed0.rrd
+python scripts/replay.py runs/20260101-120000_cat_seed0.rrd --web --port 9090
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from tactile_sim.errors import SimulationError
+
+
+@dataclass(frozen=True)
+class Config:
+    """Which recording to show, and where.
+
+    Attributes
+    ----------
+    file : Path
+        A recording written by ``scripts/probe.py`` (or any .rrd file).
+    web : bool
+        Serve it to a browser (web viewer on 127.0.0.1) instead of the native viewer.
+    web_port, grpc_port : int
+        Ports of the web viewer: HTTP for the page, gRPC for the data.
+    """
+
+    file: Path
+    web: bool = False
+    web_port: int = 9090
+    grpc_port: int = 9876
+
+
+def run(config: Config) -> None:
+    """Checks the recording, then shows it until the viewer (or the server) is stopped."""
+    from tactile_sim.recording import open_native_viewer, read_recording, serve_recording
+
+    summary = read_recording(config.file)
+    rows = sum(summary.rows.values())
+    print(f"{config.file}: {len(summary.entities)} entities, {rows} timed rows")
+    if not config.web:
+        open_native_viewer(config.file)
+        return
+    with serve_recording(
+        config.file, web_port=config.web_port, grpc_port=config.grpc_port
+    ) as viewer:
+        print(f"web viewer: {viewer.url} (Ctrl-C to stop)", flush=True)
+        viewer.wait()
+
+
+def parse_args(argv=None) -> Config:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("file", type=Path, help="the .rrd recording")
+    p.add_argument("--web", action="store_true", help="serve to a browser on 127.0.0.1")
+    p.add_argument(
+        "--port", "--web-port", dest="web_port", type=int, default=9090, help="web viewer port"
+    )
+    p.add_argument("--grpc-port", type=int, default=9876, help="recording gRPC port (--web)")
+    a = p.parse_args(argv)
+    return Config(a.file, a.web, a.web_port, a.grpc_port)
+
+
+def main(argv=None) -> int:
+    config = parse_args(argv)
+    try:
+        run(config)
+    except SimulationError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
