@@ -63,7 +63,7 @@ __all__ = [
 CLOSED_FORM_METHOD = "closed-form"
 
 #: Record fields that hold wall times (they differ between runs of the same instance).
-TIMING_FIELDS = ("time_s", "times_s", "instance_time_s")
+TIMING_FIELDS = ("time_s", "times_s", "instance_time_s", "probe_time_s")
 
 
 @dataclass(frozen=True)
@@ -394,6 +394,16 @@ def read_results(path: Path) -> list[dict]:
     return records
 
 
+def _drop_partial_line(path: Path) -> None:
+    """Cut a last line left unfinished by a killed run, so that appends start a line."""
+    if not path.exists():
+        return
+    data = path.read_bytes()
+    if data and not data.endswith(b"\n"):
+        with path.open("r+b") as f:
+            f.truncate(data.rfind(b"\n") + 1)
+
+
 def comparable(record: dict) -> dict:
     """The record without its wall times: equal for equal instances, settings and code."""
     return {k: v for k, v in record.items() if k not in TIMING_FIELDS}
@@ -543,6 +553,7 @@ def run(
         raise ValueError(f"backend must be 'local' or 'ray', got {backend!r}")
     results_path = Path(results_path)
     results_path.parent.mkdir(parents=True, exist_ok=True)
+    _drop_partial_line(results_path)
     done = {(r["instance"], r["method"], r.get("settings")) for r in read_results(results_path)}
     todo, total = [], 0
     for job in map(_as_job, jobs):

@@ -1,0 +1,272 @@
+"""The benchmark runner: resuming after a kill, the process pool and Ray give the same
+records as a serial run, simulated instances, and the script's bad-input exits."""
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+from testing_meshes import blob, ellipsoid
+
+from recognition import benchmark as bench
+from recognition.surfaces import closed_form as cf
+from recognition.surfaces.database import ModelDatabase
+from recognition.surfaces.registration import RegistrationConfig
+
+ROOT = Path(__file__).resolve().parents[1]
+SOURCE = bench.SyntheticSource(per_model=4, n_points=21, spacing_m=1.2e-3, separation_m=5e-3)
+
+
+@pytest.fixture(scope="module")
+def database_dir(tmp_path_factory) -> Path:
+    database = ModelDatabase.from_meshes(
+        {"blob": blob(subdivisions=4), "ellipsoid": ellipsoid(subdivisions=4)}, progress=False
+    )
+    return database.save(tmp_path_factory.mktemp("benchmark") / "database")
+
+
+@pytest.fixture(scope="module")
+def jobs(database_dir):
+    specs = SOURCE.specs(ModelDatabase.load(database_dir))
+    assert len(specs) == 8
+    return [bench.Job(spec, SOURCE, ("fast",), RegistrationConfig()) for spec in specs]
+
+
+@pytest.fixture(scope="module")
+def uninterrupted(database_dir, jobs, tmp_path_factory):
+    path = tmp_path_factory.mktemp("uninterrupted") / "records.jsonl"
+    return bench.run(database_dir, jobs, path, progress=False)
+
+
+def _comparable(records):
+    return sorted(
+        (bench.comparable(r) for r in records), key=lambda r: (r["instance"], r["method"])
+    )
+
+
+def test_a_run_writes_one_record_per_instance_and_method(uninterrupted, jobs):
+    assert len(uninterrupted) == len(jobs)
+    assert {r["instance"] for r in uninterrupted} == {j.spec.key for j in jobs}
+    settings = {r["settings"] for r in uninterrupted}
+    assert settings == {bench.settings_key(SOURCE, RegistrationConfig())}
+    summary = bench.summarize(uninterrupted)["fast"]
+    assert set(summary) >= {
+        "success_rate",
+        "median_time_s",
+        "p90_time_s",
+        "median_localization_error_mm",
+        "instances",
+        "method",
+    }
+    assert summary["instances"] == len(jobs)
+
+
+def test_interrupted_run_resumes_without_redoing_finished_instances(
+    database_dir, jobs, uninterrupted, tmp_path
+):
+    path = tmp_path / "records.jsonl"
+    first: list[dict] = []
+
+    def stop_after_three(record):
+        first.append(record)
+        if len(first) == 3:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        bench.run(database_dir, jobs, path, progress=False, on_record=stop_after_three)
+    assert len(bench.read_results(path)) == 3
+    again: list[dict] = []
+    records = bench.run(database_dir, jobs, path, progress=False, on_record=again.append)
+    assert len(again) == len(jobs) - 3
+    assert not {r["instance"] for r in again} & {r["instance"] for r in first}
+    assert _comparable(records) == _comparable(uninterrupted)
+
+
+def test_truncated_last_line_is_ignored_and_its_instance_redone(
+    database_dir, jobs, uninterrupted, tmp_path
+):
+    path = tmp_path / "records.jsonl"
+    lines = [json.dumps(r) for r in uninterrupted[:2]]
+    path.write_text("\n".join(lines) + "\n" + lines[0][: len(lines[0]) // 2])
+    again: list[dict] = []
+    records = bench.run(database_dir, jobs, path, progress=False, on_record=again.append)
+    assert len(again) == len(jobs) - 2
+    assert _comparable(records) == _comparable(uninterrupted)
+
+
+def test_other_settings_are_not_taken_for_done(database_dir, jobs, uninterrupted, tmp_path):
+    path = tmp_path / "records.jsonl"
+    path.write_text("".join(json.dumps(r) + "\n" for r in uninterrupted))
+    other = [
+        bench.Job(j.spec, j.source, j.methods, RegistrationConfig(delta=20.0)) for j in jobs[:2]
+    ]
+    again: list[dict] = []
+    bench.run(database_dir, other, path, progress=False, on_record=again.append)
+    assert len(again) == 2
+
+
+_KILLED_RUN = """
+import sys
+from pathlib import Path
+from recognition import benchmark as bench
+from recognition.surfaces.database import ModelDatabase
+from recognition.surfaces.registration import RegistrationConfig
+source = bench.SyntheticSource(per_model=4, n_points=21, spacing_m=1.2e-3, separation_m=5e-3)
+database = Path(sys.argv[1])
+specs = source.specs(ModelDatabase.load(database))
+jobs = [bench.Job(s, source, ("fast",), RegistrationConfig()) for s in specs]
+slow = lambda record: __import__("time").sleep(0.5)
+bench.run(database, jobs, Path(sys.argv[2]), progress=False, on_record=slow)
+"""
+
+
+@pytest.mark.slow
+def test_benchmark_killed_halfway_finishes_without_redoing(
+    database_dir, jobs, uninterrupted, tmp_path
+):
+    path = tmp_path / "records.jsonl"
+    process = subprocess.Popen(
+        [sys.executable, "-c", _KILLED_RUN, str(database_dir), str(path)], cwd=ROOT
+    )
+    try:
+        deadline = time.monotonic() + 120
+        while len(bench.read_results(path)) < 3:
+            assert process.poll() is None, "the benchmark ended before it was killed"
+            assert time.monotonic() < deadline
+            time.sleep(0.05)
+        os.kill(process.pid, signal.SIGKILL)
+    finally:
+        process.kill()
+        process.wait()
+    done = {r["instance"] for r in bench.read_results(path)}
+    assert 3 <= len(done) < len(jobs)
+    again: list[dict] = []
+    records = bench.run(database_dir, jobs, path, progress=False, on_record=again.append)
+    assert {r["instance"] for r in again} == {j.spec.key for j in jobs} - done
+    assert _comparable(records) == _comparable(uninterrupted)
+
+
+@pytest.mark.slow
+def test_process_pool_gives_the_same_records(database_dir, jobs, uninterrupted, tmp_path):
+    records = bench.run(database_dir, jobs, tmp_path / "records.jsonl", workers=2, progress=False)
+    assert _comparable(records) == _comparable(uninterrupted)
+
+
+@pytest.fixture(scope="module")
+def ray_cluster():
+    """A local Ray cluster of 2 CPUs on 127.0.0.1, its GCS address."""
+    # Ray binds to the loopback address only when told that it cannot form a cluster
+    # (read when ray is imported).
+    names = ("RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER", "RAY_USAGE_STATS_ENABLED")
+    saved = {k: os.environ.get(k) for k in names}
+    os.environ.update(dict.fromkeys(names, "0"))
+    ray = pytest.importorskip("ray")
+    try:
+        ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False)
+        address = ray.get_runtime_context().gcs_address
+        assert address.startswith("127.0.0.1:")
+        yield address
+    finally:
+        ray.shutdown()
+        for k, v in saved.items():
+            if v is None:
+                os.environ.pop(k, None)
+            else:
+                os.environ[k] = v
+
+
+@pytest.mark.slow
+def test_ray_backend_gives_the_same_records_as_local(
+    ray_cluster, database_dir, jobs, uninterrupted, tmp_path
+):
+    records = bench.run(
+        database_dir, jobs, tmp_path / "ray.jsonl", workers=2, backend="ray", progress=False
+    )
+    assert _comparable(records) == _comparable(uninterrupted)
+
+
+_RAY_DRIVER = """
+import sys
+from pathlib import Path
+from recognition import benchmark as bench
+from recognition.surfaces.database import ModelDatabase
+from recognition.surfaces.registration import RegistrationConfig
+source = bench.SyntheticSource(per_model=4, n_points=21, spacing_m=1.2e-3, separation_m=5e-3)
+database = Path(sys.argv[1])
+specs = source.specs(ModelDatabase.load(database))
+jobs = [bench.Job(s, source, ("fast",), RegistrationConfig()) for s in specs]
+bench.run(database, jobs, Path(sys.argv[2]), workers=2, backend="ray",
+          ray_address=sys.argv[3], progress=False)
+"""
+
+
+@pytest.mark.slow
+def test_ray_address_connects_to_an_existing_cluster(
+    ray_cluster, database_dir, uninterrupted, tmp_path
+):
+    path = tmp_path / "driver.jsonl"
+    subprocess.run(
+        [sys.executable, "-c", _RAY_DRIVER, str(database_dir), str(path), ray_cluster],
+        cwd=ROOT,
+        check=True,
+        timeout=300,
+    )
+    assert _comparable(bench.read_results(path)) == _comparable(uninterrupted)
+
+
+@pytest.mark.slow
+def test_simulated_instances_are_reproducible_and_recorded(tmp_path):
+    from tactile_sim.experiments import solids_experiment
+
+    source = solids_experiment(objects=("sphere",), sessions_per_object=2, n_points=11)
+    specs = source.specs(None)
+    assert [s.key for s in specs] == ["sphere/0", "sphere/1"]
+    assert specs[0].seed != specs[1].seed
+    models = bench.ClosedFormModels()
+    registration = cf.RegistrationConfig(delta=float("inf"), max_candidates=4)
+    jobs = [bench.Job(s, source, (bench.CLOSED_FORM_METHOD,), registration) for s in specs]
+    records = bench.run(models, jobs, tmp_path / "sim.jsonl", progress=False)
+    assert len(records) == 2
+    for r in records:
+        assert r["points_per_curve"] == [11, 11, 11]
+        assert set(r["errors_mm"]) == set(models.names)
+        assert r["reference"]["errors_mm"].keys() == r["errors_mm"].keys()
+        assert 0 <= r["sensed_error_mean_mm"] < 0.1
+    again = bench.run_job(models.load(), jobs[0])[0]
+    assert bench.comparable(again) == {
+        k: v for k, v in bench.comparable(records[0]).items() if k != "settings"
+    }
+
+
+def _script():
+    import importlib.util
+
+    name = "scripts_benchmark"
+    if name not in sys.modules:
+        spec = importlib.util.spec_from_file_location(name, ROOT / "scripts" / "benchmark.py")
+        module = importlib.util.module_from_spec(spec)
+        sys.modules[name] = module
+        spec.loader.exec_module(module)
+    return sys.modules[name]
+
+
+def test_script_reports_an_unknown_object_and_exits_2(tmp_path, capsys):
+    script = _script()
+    assert script.main(["--source", "sim", "--object", "unicorn", "--out-dir", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1
+    assert "unknown object 'unicorn'" in err and "cat" in err
+
+
+def test_script_parses_the_sim_options():
+    config = _script().parse_args(
+        ["--source", "sim", "--experiment", "solids", "--sessions", "2", "--tag", "_x"]
+    )
+    assert config.source == "sim"
+    assert config.experiments == ("solids",)
+    assert config.sessions == 2
+    assert config.tag == "_x"
