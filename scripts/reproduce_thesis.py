@@ -23,7 +23,7 @@ from tactile_sim.errors import SimulationError
 
 TABLES = ("3.1", "3.2", "3.3", "3.4", "3.5", "recognition", "fig4.5", "4.2", "4.3", "4.5")
 #: Tables with a simulated-robot source (``--source sim``).
-SIM_TABLES = ("3.4",)
+SIM_TABLES = ("3.4", "3.5")
 #: Largest relative error (%) of a and b accepted for Table 3.4 from simulated points.
 TABLE_3_4_SIM_TOLERANCE_PERCENT = 2.0
 
@@ -92,6 +92,8 @@ def run(config: Config) -> list[chapter3.TableResult]:
             result = table_3_4_sim(joystick, config)
         elif name == "3.4":
             result = chapter3.table_3_4(joystick)
+        elif name == "3.5" and config.source == "sim":
+            result = table_3_5_sim(config)
         elif name == "3.5":
             result = chapter3.table_3_5(replace(experiment, spacing=0.005))
         elif name == "fig4.5":
@@ -172,6 +174,57 @@ def table_3_4_sim(joystick: chapter3.JoystickExperiment, config: Config):
         f"{accuracy['wall_seconds']:.1f} s of tracing; a and b within "
         f"{TABLE_3_4_SIM_TOLERANCE_PERCENT:g} %: {result.measured['within_tolerance']}.",
     )
+
+
+def table_3_5_sim(config: Config):
+    """Table 3.5 analogue from the simulated robot tracing each of the five segments of
+    the extruded closed cubic spline (Fig. 3.8) in a horizontal plane, a point every
+    0.5 mm from 3 mm before the segment's first knot to 3 mm past its last."""
+    import numpy as np
+
+    from tactile_sim.collision import load_solid
+    from tactile_sim.experiments import TraceConfig, spline_segment_bearings, trace_outlines
+
+    coefficients = np.asarray(load_solid("planar_spline").parameters["spline_coefficients_m"])
+    segments, distances, seconds = [], [], 0.0
+    for k, (bearing, length) in enumerate(spline_segment_bearings()):
+        traces = trace_outlines(
+            TraceConfig(
+                object_name="planar_spline",
+                trials=1,
+                arcs_per_trial=1,
+                arc_length_m=length,
+                spacing_m=0.5e-3,
+                start_angles_rad=(bearing,),
+                seed=config.seed + k,
+            )
+        )
+        arc = traces.trials[0][0]
+        on_segment = np.floor(arc.outline_parameter) == k
+        segments.append((arc.points_in_world, on_segment, coefficients[k]))
+        distances.append(arc.distance_to_outline_m)
+        seconds += arc.wall_seconds
+    d = np.concatenate(distances)
+    # the estimator of Table 3.4's joystick data: the default one (11 points, degree 6)
+    # is tuned for noise-free samples
+    estimator = chapter3.CurveExperiment(window=21, degree=3, kappa_window=21, seed=config.seed)
+    result = chapter3.table_3_5_from_points(
+        segments,
+        estimator,
+        description=(
+            "points sensed by the simulated robot tracing each segment of the extruded "
+            f"spline every 0.5 mm (in-plane distance to the spline: mean "
+            f"{d.mean() * 1e3:.3f} mm, max {d.max() * 1e3:.3f} mm)"
+        ),
+    )
+    result.measured["source"] = "sim"
+    result.measured["sensing"] = {
+        "points": int(d.size),
+        "distance_to_outline_mean_mm": float(d.mean() * 1e3),
+        "distance_to_outline_max_mm": float(d.max() * 1e3),
+        "wall_seconds": seconds,
+    }
+    return result
 
 
 def parse_args(argv=None) -> Config:

@@ -39,6 +39,7 @@ __all__ = [
     "outline_distance",
     "session_seed",
     "solids_experiment",
+    "spline_segment_bearings",
     "trace_outlines",
 ]
 
@@ -257,6 +258,10 @@ class OutlineTrace:
         The same in the object frame (ground truth pose applied; evaluation only).
     distance_to_outline_m : (n,) float, metres
         In-plane distance of every sensed point to the true outline.
+    outline_parameter : (n,) float
+        Where on the outline each sensed point lies (its nearest outline point): the
+        ellipse's angle t in [0, 2 pi) of (a cos t, b sin t); for the closed spline,
+        segment index plus the segment's parameter t in [0, 1) (Eq. (3.25)).
     height_span_m : float, metres
         Spread of the sensed points' heights (the plane is horizontal).
     wall_seconds : float, seconds
@@ -268,6 +273,7 @@ class OutlineTrace:
     points_in_world: NDArray[np.float64]
     points_in_object: NDArray[np.float64]
     distance_to_outline_m: NDArray[np.float64]
+    outline_parameter: NDArray[np.float64]
     height_span_m: float
     wall_seconds: float
     truncated: str = ""
@@ -310,22 +316,56 @@ class OutlineTraces:
         }
 
 
-def _dense_outline(object_name: str, parameters) -> NDArray[np.float64]:
+_ELLIPSE_SAMPLES = 200_000
+_SPLINE_SAMPLES_PER_SEGMENT = 40_000
+
+
+def _dense_outline(object_name: str, parameters) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """The true outline, object frame, densely enough that the nearest vertex gives the
-    distance to within a micrometre: (m, 2) metres."""
+    distance to within a micrometre: (m, 2) metres, and each vertex's outline parameter
+    (see :attr:`OutlineTrace.outline_parameter`), (m,)."""
     if object_name == "planar_ellipse":
-        return ellipse_outline(*parameters["semi_axes_m"], n_segments=200_000)
-    return closed_spline_outline(parameters["knots_m"], samples_per_segment=40_000)
+        outline = ellipse_outline(*parameters["semi_axes_m"], n_segments=_ELLIPSE_SAMPLES)
+        return outline, np.arange(len(outline)) * (2 * math.pi / _ELLIPSE_SAMPLES)
+    outline = closed_spline_outline(
+        parameters["knots_m"], samples_per_segment=_SPLINE_SAMPLES_PER_SEGMENT
+    )
+    return outline, np.arange(len(outline)) / _SPLINE_SAMPLES_PER_SEGMENT
 
 
 def outline_distance(
     points: NDArray[np.float64], outline: NDArray[np.float64]
-) -> NDArray[np.float64]:
-    """Returns the distance of points (n, 2) to a dense closed outline (m, 2), metres."""
+) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+    """Returns the distance of points (n, 2) to a dense closed outline (m, 2), metres, and
+    the index of each point's nearest outline vertex."""
     from scipy.spatial import cKDTree
 
-    distance, _ = cKDTree(outline).query(np.asarray(points)[:, :2])
-    return distance
+    distance, index = cKDTree(outline).query(np.asarray(points)[:, :2])
+    return distance, index
+
+
+def spline_segment_bearings(margin_m: float = 3e-3) -> tuple[tuple[float, float], ...]:
+    """Returns, per segment of the closed spline, the bearing (object frame, radians) of a
+    point ``margin_m`` before its first knot and the arc length to trace from there to
+    ``margin_m`` past its last knot, metres (a trace over one segment, with room for the
+    local fits at its ends)."""
+    parameters = load_solid("planar_spline").parameters
+    outline, parameter = _dense_outline("planar_spline", parameters)
+    steps = np.linalg.norm(np.diff(outline, axis=0, append=outline[:1]), axis=1)
+    s = np.concatenate([[0.0], np.cumsum(steps)])[:-1]
+    perimeter = float(steps.sum())
+    out = []
+    for k in range(len(parameters["knots_m"])):
+        start = s[int(np.searchsorted(parameter, k))]
+        end = (
+            s[int(np.searchsorted(parameter, k + 1))]
+            if k + 1 < len(parameters["knots_m"])
+            else perimeter
+        )
+        begin = (start - margin_m) % perimeter
+        x, y = outline[int(np.searchsorted(s, begin)) % len(outline)]
+        out.append((math.atan2(float(y), float(x)), float(end - start + 2 * margin_m)))
+    return tuple(out)
 
 
 def trace_outlines(config: TraceConfig = TraceConfig(), *, progress: bool = False) -> OutlineTraces:
@@ -341,7 +381,7 @@ def trace_outlines(config: TraceConfig = TraceConfig(), *, progress: bool = Fals
     """
     solid = load_solid(config.object_name)
     parameters = dict(solid.parameters)
-    outline = _dense_outline(config.object_name, parameters)
+    outline, outline_parameter = _dense_outline(config.object_name, parameters)
     trials = []
     for i in range(config.trials):
         arcs = []
@@ -367,13 +407,15 @@ def trace_outlines(config: TraceConfig = TraceConfig(), *, progress: bool = Fals
                 progress=progress,
             )
             in_object = trace.points_in_object
+            distance, nearest = outline_distance(in_object, outline)
             side = trace.sweep.sides[0]
             arcs.append(
                 OutlineTrace(
                     seed=seed,
                     points_in_world=trace.points_in_world[:, :2].copy(),
                     points_in_object=in_object[:, :2].copy(),
-                    distance_to_outline_m=outline_distance(in_object, outline),
+                    distance_to_outline_m=distance,
+                    outline_parameter=outline_parameter[nearest],
                     height_span_m=float(np.ptp(trace.points_in_world[:, 2])),
                     wall_seconds=trace.wall_seconds,
                     truncated=side.message,

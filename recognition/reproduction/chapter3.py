@@ -41,6 +41,7 @@ __all__ = [
     "table_3_4",
     "table_3_4_from_points",
     "table_3_5",
+    "table_3_5_from_points",
 ]
 
 CLASSES = (
@@ -779,6 +780,82 @@ def table_3_5(experiment: CurveExperiment = CurveExperiment(spacing=0.005)) -> T
         f"{experiment.describe()}.\n\n" + markdown_table(header, rows)
     )
     return TableResult("3.5", TABLE_3_5_THESIS, measured, asdict(experiment), text)
+
+
+def table_3_5_from_points(
+    segments, experiment: CurveExperiment = CurveExperiment(spacing=0.005), *, description=""
+) -> TableResult:
+    """Table 3.5 analogue from measured points of a closed cubic spline, segment by segment.
+
+    For each traced segment, kappa, kappa_s and the tangent rotation are estimated along
+    the whole trace (units: cm) and eight estimates evenly spaced over the points whose
+    fit windows lie on the segment are kept (kappa_s jumps at the knots); the spline
+    class (3.35) is fitted to estimates 0, 3, 7 ("test 1"), 1, 4, 6 ("test 2") and all
+    eight, as in :func:`table_3_5`. The truth is
+    the segment's polynomials (3.25) reduced to the form (3.35).
+
+    Parameters
+    ----------
+    segments : sequence of (points_m, on_segment, coefficients_m)
+        ``points_m`` (n, 2) float, metres: the ordered traced points (any frame);
+        ``on_segment`` (n,) bool: which of them lie on the segment; ``coefficients_m``
+        (2, 4) float, metres: ``x(t)`` and ``y(t)`` of the segment, powers 3..0, in the
+        frame of ``points_m`` up to a rigid motion.
+    experiment : CurveExperiment
+        Estimator settings (``window``, ``degree``, ``kappa_window``).
+    description : str
+        How the points were measured (for the Markdown).
+    """
+    from recognition.curves.reduction import reduce_cubic_spline
+
+    groups = {"test 1": [0, 3, 7], "test 2": [1, 4, 6], "all eight": list(range(8))}
+    measured: dict = {}
+    rows = []
+    for k, (points_m, on_segment, coefficients_m) in enumerate(segments):
+        truth = reduce_cubic_spline(*(100.0 * np.asarray(coefficients_m)).reshape(-1))
+        params = truth.curve.params
+        g = experiment.estimate(100.0 * np.asarray(points_m, dtype=float))
+        # estimates whose fit windows lie on the segment: kappa_s jumps at the knots
+        half = experiment.window // 2 + (experiment.kappa_window or 1) // 2
+        inside = np.convolve(np.asarray(on_segment, float), np.ones(2 * half + 1), "same")
+        on = np.flatnonzero(inside[g.index] > 2 * half + 0.5)
+        if on.size < 8:
+            raise InvalidCurveData(f"segment {k}: {on.size} estimates on it, need 8")
+        g = g.subset(on[np.linspace(0, on.size - 1, 8).round().astype(int)])
+        entry = {"real": dict(zip("abc", params, strict=True))}
+        rows.append([f"segment {k} real", *params, 0.0])
+        for name, idx in groups.items():
+            fit = fit_class(CurveKind.CUBIC_SPLINE, g.kappa[idx], g.kappa_s[idx], g.dphi[idx])
+            entry[name] = dict(zip("abc", fit.params, strict=True)) if fit.params else {}
+            entry[name]["relative_error_percent"] = 100 * relative_parameter_error(
+                params, fit.params
+            )
+            e = entry[name]
+            rows.append(
+                [
+                    f"segment {k} {name}",
+                    e.get("a"),
+                    e.get("b"),
+                    e.get("c"),
+                    e["relative_error_percent"],
+                ]
+            )
+        measured[f"segment {k}"] = entry
+    text = (
+        "**Table 3.5** analogue: segments of the closed cubic spline from three of eight "
+        f"estimates (0, 3, 7 and 1, 4, 6) and from all eight, {description or 'measured points'}"
+        f"; shape (3.35) in cm; local polynomial fit over {experiment.window} points, "
+        f"degree {experiment.degree}"
+        + (
+            f", kappa_s from {experiment.kappa_window} kappa estimates"
+            if experiment.kappa_window
+            else ""
+        )
+        + ".\n\n"
+        + markdown_table(["", "a", "b", "c", "relative error %"], rows)
+    )
+    settings = {k: v for k, v in asdict(experiment).items() if k not in ("spacing", "noise_std")}
+    return TableResult("3.5", TABLE_3_5_THESIS, measured, settings, text)
 
 
 # --- figures ----------------------------------------------------------------------------
