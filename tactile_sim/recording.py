@@ -6,10 +6,12 @@ import contextlib
 import math
 import os
 import shutil
+import signal
 import socket
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 import urllib.parse
 import warnings
@@ -657,6 +659,10 @@ def check_ports(web_port: int = 9090, grpc_port: int = 9876, host: str = "127.0.
         raise PortInUse(grpc_port, "--grpc-port", _free_port(host, (web_port,)))
 
 
+def _interrupt(signum, frame) -> None:
+    raise KeyboardInterrupt
+
+
 class WebViewer:
     """A running web viewer (``rerun --serve-web``) serving one recording on one host.
 
@@ -674,12 +680,18 @@ class WebViewer:
         self.url = url
 
     def wait(self) -> int:
-        """Blocks until the server stops (Ctrl-C stops it); returns its exit status."""
+        """Blocks until the server stops (Ctrl-C or SIGTERM stop it); returns its exit
+        status (0 when stopped here)."""
+        main = threading.current_thread() is threading.main_thread()
+        previous = signal.signal(signal.SIGTERM, _interrupt) if main else None
         try:
             return self.process.wait()
         except KeyboardInterrupt:
-            self.close()
             return 0
+        finally:
+            self.close()
+            if main:
+                signal.signal(signal.SIGTERM, previous)
 
     def close(self) -> None:
         """Stops the server."""
@@ -749,7 +761,6 @@ def serve_recording(
         stdout=log,
         stderr=subprocess.STDOUT,
         stdin=subprocess.DEVNULL,
-        start_new_session=True,
     )
     viewer = WebViewer(process, _viewer_url(host, web_port, grpc_port))
     deadline = time.monotonic() + timeout_s
