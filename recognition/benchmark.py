@@ -8,9 +8,11 @@ a *source*: any object with
   regenerated from the spec alone (so any worker can make it);
 
 and a frozen dataclass of settings (hashed, with the registration settings, into the
-``settings`` of every record). :class:`SyntheticSource` samples curves on the models
-themselves (Section 4.3.4); ``tactile_sim.experiments.SimulatedSource`` has the simulated
-robot probe the objects (Section 4.4).
+``settings`` of every record). Specs and instances need only the fields of
+:class:`InstanceSpec` and :class:`Instance` (a source may use its own classes).
+:class:`SyntheticSource` samples curves on the models themselves (Section 4.3.4);
+``tactile_sim.experiments.SimulatedSource`` has the simulated robot probe the objects
+(Section 4.4).
 
 The database is a :class:`~recognition.surfaces.database.ModelDatabase` directory (the
 methods ``fast``, ``thesis``, ``icp-baseline``) or :class:`ClosedFormModels` (the method

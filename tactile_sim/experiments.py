@@ -3,10 +3,12 @@
 :class:`SimulatedSource` makes recognition-benchmark instances by probing an object with
 the simulated Cobra 600 (three sweeps through one point, :func:`probe_object`): each
 instance is regenerated from its seed alone, so any worker of
-:func:`recognition.benchmark.run` can make it. :func:`catalog_experiment` is the Table
-4.6 / 4.7 setting (the ten catalog objects, 3 x 21 points at 1.2 mm, planes 60 degrees
-apart), :func:`solids_experiment` the Table 4.5 one (the four solids of Fig. 4.15, n = 41,
-d = 0.05 mm).
+:func:`recognition.benchmark.run` can make it. Its specs and instances have the fields
+that ``recognition.benchmark`` reads (:class:`SessionSpec`, :class:`ProbedInstance`), so
+that tactile_sim imports nothing of ``recognition`` but ``DataCurves``.
+:func:`catalog_experiment` is the Table 4.6 / 4.7 setting (the ten catalog objects,
+3 x 21 points at 1.2 mm, planes 60 degrees apart), :func:`solids_experiment` the Table
+4.5 one (the four solids of Fig. 4.15, n = 41, d = 0.05 mm).
 
 :func:`trace_outlines` traces an extruded outline (the ellipse of Table 3.4, the closed
 cubic spline of Fig. 3.8) in a horizontal plane (:func:`trace_contour`) and measures the
@@ -33,6 +35,8 @@ __all__ = [
     "FIG_4_15_SOLIDS",
     "OutlineTrace",
     "OutlineTraces",
+    "ProbedInstance",
+    "SessionSpec",
     "SimulatedSource",
     "TraceConfig",
     "catalog_experiment",
@@ -53,6 +57,54 @@ def session_seed(base_seed: int, name: str, index: int) -> int:
     """Returns the seed of session ``index`` of object ``name``: a hash of the three."""
     digest = hashlib.sha256(repr(("session", base_seed, name, index)).encode()).digest()
     return int.from_bytes(digest[:4], "little") >> 1
+
+
+@dataclass(frozen=True)
+class SessionSpec:
+    """One probing session of a benchmark (a ``recognition.benchmark.InstanceSpec``).
+
+    Attributes
+    ----------
+    model : str
+        The probed object's name.
+    index : int
+        Session number of this object.
+    vertex : None
+        Sessions choose their point p themselves.
+    seed : int
+        The session's seed (:func:`session_seed`).
+    """
+
+    model: str
+    index: int
+    vertex: None
+    seed: int
+
+    @property
+    def key(self) -> str:
+        return f"{self.model}/{self.index}"
+
+
+@dataclass(frozen=True)
+class ProbedInstance:
+    """A probing session as a benchmark instance (a ``recognition.benchmark.Instance``).
+
+    Attributes
+    ----------
+    curves : DataCurves or None
+        The data curves (world frame), None when the session failed.
+    point_in_model : (3,) float or None, metres
+        The true p, object frame.
+    info : dict
+        JSON-ready facts of the session (``error`` when it failed).
+    reference_curves : DataCurves or None
+        The other point set of the session (true contact points or sensed points).
+    """
+
+    curves: DataCurves | None
+    point_in_model: NDArray[np.float64] | None = None
+    info: dict = field(default_factory=dict)
+    reference_curves: DataCurves | None = None
 
 
 @dataclass(frozen=True)
@@ -107,20 +159,18 @@ class SimulatedSource:
         if self.sessions_per_object < 1:
             raise ValueError(f"sessions_per_object must be >= 1, got {self.sessions_per_object}")
 
-    def specs(self, database=None) -> list:
+    def specs(self, database=None) -> list[SessionSpec]:
         """Returns the instance specs: ``sessions_per_object`` per object, in order.
 
         ``database`` is not used: the objects are probed wherever the seed puts p.
         """
-        from recognition.benchmark import InstanceSpec
-
         return [
-            InstanceSpec(name, k, None, session_seed(self.seed, name, k))
+            SessionSpec(name, k, None, session_seed(self.seed, name, k))
             for name in self.objects
             for k in range(self.sessions_per_object)
         ]
 
-    def instance(self, database, spec):
+    def instance(self, database, spec: SessionSpec) -> ProbedInstance:
         """Probes the spec's object with the spec's seed; returns a benchmark instance.
 
         The instance's ``info`` holds the session's facts: probing wall and simulated
@@ -129,8 +179,6 @@ class SimulatedSource:
         fails (a sweep left with too few points, an unreachable point, an unstable
         simulation) gives an instance without curves whose ``info["error"]`` says why.
         """
-        from recognition.benchmark import Instance
-
         try:
             session = probe_object(
                 spec.model,
@@ -145,7 +193,7 @@ class SimulatedSource:
         except UnknownObject:
             raise
         except SimulationError as exc:
-            return Instance(None, None, {"error": f"{type(exc).__name__}: {exc}"})
+            return ProbedInstance(None, None, {"error": f"{type(exc).__name__}: {exc}"})
         truth = session.ground_truth
         true_curves = DataCurves(
             curves=truth.true_contact_points_in_world, approach=session.curves.approach
@@ -174,7 +222,7 @@ class SimulatedSource:
             curves, reference = session.curves, true_curves
         else:
             curves, reference = true_curves, session.curves
-        return Instance(curves, np.asarray(truth.point_in_object), info, reference)
+        return ProbedInstance(curves, np.asarray(truth.point_in_object), info, reference)
 
 
 def catalog_experiment(**overrides) -> SimulatedSource:
