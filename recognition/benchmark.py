@@ -613,7 +613,13 @@ def run(
 
 
 def _run_ray(database, todo: list[Job], record, workers: int, address: str | None) -> None:
-    """Jobs on Ray actors, each holding the database; ``workers`` actors."""
+    """Jobs on Ray actors, each holding the database; ``workers`` actors.
+
+    A local instance (no ``address``) listens on 127.0.0.1 only, unless the environment
+    says otherwise (Ray reads ``RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER`` when imported).
+    """
+    if address is None:
+        os.environ.setdefault("RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER", "0")
     import ray
 
     if not ray.is_initialized():
