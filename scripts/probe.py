@@ -80,6 +80,10 @@ def run(config: Config) -> dict:
         from tactile_sim.recording import check_ports
 
         check_ports(config.web_port, config.grpc_port)
+    elif config.rerun == "spawn":
+        from tactile_sim.recording import check_display
+
+        check_display()
     start = time.perf_counter()
     database = catalog_database()
     loaded = time.perf_counter()

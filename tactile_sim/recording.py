@@ -31,6 +31,7 @@ __all__ = [
     "MODES",
     "RecordingSummary",
     "WebViewer",
+    "check_display",
     "check_ports",
     "log_probe_run",
     "open_native_viewer",
@@ -575,7 +576,7 @@ def record_probe_run(
     Raises
     ------
     RecordingError
-        The file cannot be written.
+        The file cannot be written, or ("spawn") there is no display for the viewer.
     """
     import rerun as rr
 
@@ -594,7 +595,8 @@ def record_probe_run(
             raise RecordingError(f"cannot create {path.parent}: {error}") from error
     try:
         if mode == "spawn":
-            rec.spawn(connect=False)
+            check_display()
+            rr.spawn(connect=False, executable_path=_rerun_executable(), recording=rec)
             sinks = [rr.GrpcSink()] + ([rr.FileSink(str(path))] if path else [])
             rec.set_sinks(*sinks, default_blueprint=blueprint)
         else:
@@ -787,6 +789,23 @@ def _viewer_url(host: str, web_port: int, grpc_port: int) -> str:
     return f"http://{host}:{web_port}/?url={source}"
 
 
+def check_display() -> None:
+    """Checks that the native viewer has a display to open a window on.
+
+    Raises
+    ------
+    RecordingError
+        Linux without DISPLAY or WAYLAND_DISPLAY; the message names the web viewer instead.
+    """
+    if sys.platform.startswith("linux") and not (
+        os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")
+    ):
+        raise RecordingError(
+            "no display for the native viewer (DISPLAY is not set): use the web viewer "
+            "(scripts/probe.py --rerun serve, scripts/replay.py FILE --web)"
+        )
+
+
 def open_native_viewer(path: str | Path) -> int:
     """Opens a recording in the native viewer and waits until it is closed.
 
@@ -799,13 +818,7 @@ def open_native_viewer(path: str | Path) -> int:
     """
     path = Path(path)
     read_recording(path)
-    if sys.platform.startswith("linux") and not (
-        os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")
-    ):
-        raise RecordingError(
-            "no display for the native viewer (DISPLAY is not set): serve the recording to "
-            "a browser instead (scripts/replay.py FILE --web)"
-        )
+    check_display()
     status = subprocess.call([_rerun_executable(), "--bind", "127.0.0.1", str(path)])
     if status not in (0, 130):
         raise RecordingError(
