@@ -18,8 +18,9 @@ $(STAMP): pyproject.toml
 	$(PY) -m pip install --quiet -e '.[dev]'
 	touch $(STAMP)
 
+# The main job: probe the cat with the simulated robot, recognise it, save a recording.
 demo: $(STAMP)
-	$(PY) scripts/reproduce_thesis.py --table all
+	$(PY) scripts/probe.py --object cat
 
 # The web viewer test renders a recording in headless Chromium (Debian's package; CI is
 # Debian and runs as root).

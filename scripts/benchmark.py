@@ -36,7 +36,9 @@ from tactile_sim.errors import SimulationError
 ROOT = Path(__file__).resolve().parents[1]
 METHODS = ("fast", "thesis", "icp-baseline")
 SOURCES = ("synthetic", "sim")
-EXPERIMENTS = ("catalog", "solids")
+EXPERIMENTS = ("catalog", "solids", "sensing")
+SENSING_OBJECTS = ("cat", "dog", "bird")
+"""Objects of the sensing experiment unless ``--object`` names others."""
 SWEEPS = {
     "delta": ("delta_per_mm", [0.01, 0.02, 0.03, 0.04, 0.05], "Fig. 4.11"),
     "length": ("length_mm", [6.0, 12.0, 18.0, 24.0, 30.0], "Fig. 4.12"),
@@ -85,7 +87,10 @@ class Config:
     experiments : tuple of str
         With ``source="sim"``: "catalog" (Tables 4.6-4.7: the ten objects, 3 x 21 points
         at 1.2 mm, recognised against the catalog database) and/or "solids" (Table 4.5:
-        the four solids of Fig. 4.15, n = 41 at 0.05 mm, against their closed forms).
+        the four solids of Fig. 4.15, n = 41 at 0.05 mm, against their closed forms)
+        and/or "sensing" (the sensed points against the original meshes over
+        ``sessions`` sessions of each of three objects, and warm wall times of a session
+        and of ``scripts/probe.py``).
     sessions : int
         With ``source="sim"``: probing sessions (seeds) per object.
     objects : tuple of str or None
@@ -244,6 +249,9 @@ def run_sim(config: Config) -> dict:
     started = time.strftime("%Y-%m-%d %H:%M")
     summary: dict = {}
     for experiment in config.experiments:
+        if experiment == "sensing":
+            summary["sensing"] = run_sensing(config, started)
+            continue
         make = catalog_experiment if experiment == "catalog" else solids_experiment
         source = make(
             sessions_per_object=config.sessions, curves=config.sim_curves, seed=config.seed
@@ -317,6 +325,115 @@ def run_sim(config: Config) -> dict:
     if config.json_path:
         _write_json(config.json_path, summary)
     return summary
+
+
+def run_sensing(config: Config, started: str) -> dict:
+    """Sensed points against the original meshes; warm wall times of a session and of
+    ``scripts/probe.py`` (a fresh process, as a user runs it; the first run warms the
+    caches). Writes ``sim_sensing<tag>.md``; returns the figures (millimetres, seconds)."""
+    import subprocess
+    import tempfile
+
+    from tactile_sim.accuracy import sensing_accuracy, session_timing
+
+    objects = config.objects or SENSING_OBJECTS
+    accuracy = sensing_accuracy(objects, sessions_per_object=config.sessions, seed=config.seed)
+    timing = session_timing(objects[0], repeats=3, seed=config.seed)
+    command = [sys.executable, str(ROOT / "scripts" / "probe.py"), "--object", objects[0]]
+    walls = []
+    with tempfile.TemporaryDirectory() as out:
+        for k in range(4):
+            start = time.perf_counter()
+            done = subprocess.run(
+                [*command, "--seed", str(config.seed + k), "--out", out],
+                capture_output=True,
+                text=True,
+            )
+            if done.returncode != 0:
+                raise SimulationError(f"probe.py failed: {done.stderr.strip()[-300:]}")
+            walls.append(time.perf_counter() - start)
+    figures = accuracy.summary() | {
+        "session_object": objects[0],
+        "session_build_s": list(timing.build_seconds),
+        "session_probe_s": list(timing.probe_seconds),
+        "session_total_s": list(timing.session_seconds),
+        "session_sim_s": list(timing.sim_seconds),
+        "probe_script_cold_or_first_s": walls[0],
+        "probe_script_warm_s": walls[1:],
+    }
+    rows = [
+        [
+            name,
+            o["n_points"],
+            o["distance_to_mesh_mean_mm"],
+            o["distance_to_mesh_p95_mm"],
+            o["distance_to_mesh_max_mm"],
+            o["truncated_sweeps"],
+            o["stylus_contacts"],
+        ]
+        for name, o in figures["objects"].items()
+    ]
+    rows.append(
+        [
+            "all",
+            figures["n_points"],
+            figures["distance_to_mesh_mean_mm"],
+            figures["distance_to_mesh_p95_mm"],
+            figures["distance_to_mesh_max_mm"],
+            "",
+            "",
+        ]
+    )
+    text = "\n".join(
+        [
+            "# Simulated sensing: accuracy and speed",
+            "",
+            f"Command: `python scripts/benchmark.py {' '.join(sys.argv[1:])}`  ",
+            f"Date: {started}; machine: {machine()}.  ",
+            f"{len(objects)} objects x {config.sessions} sessions (3 sweeps x 21 points at "
+            "1.2 mm, random pose, p and plane yaw per seed; seeds from "
+            f"--seed {config.seed}). Distances to the original mesh by libigl's AABB "
+            "(exact point-triangle).",
+            "",
+            "## Sensed points against the original mesh (mm)",
+            "",
+            markdown_table(
+                ["object", "points", "mean", "p95", "max", "truncated sweeps", "shaft contacts"],
+                rows,
+                digits=3,
+            ),
+            "",
+            f"Distance to the true contact point (the mesh point closest to the simulated tip "
+            f"centre): mean {figures['error_to_true_contact_mean_mm']:.3f} mm, p95 "
+            f"{figures['error_to_true_contact_p95_mm']:.3f} mm.",
+            "",
+            "## Wall time (s)",
+            "",
+            markdown_table(
+                ["what", "runs", "min", "median", "max"],
+                [
+                    [label, len(v), min(v), float(np.median(v)), max(v)]
+                    for label, v in (
+                        (f"session on {objects[0]}: scene build", timing.build_seconds),
+                        (f"session on {objects[0]}: three sweeps", timing.probe_seconds),
+                        (f"session on {objects[0]}: probe_object total", timing.session_seconds),
+                        (f"`scripts/probe.py --object {objects[0]}`, warm", walls[1:]),
+                    )
+                ],
+                digits=3,
+            ),
+            "",
+            f"Simulated time per session: {float(np.median(timing.sim_seconds)):.1f} s. "
+            f"The first `scripts/probe.py` run took {walls[0]:.2f} s (caches already warm "
+            "unless this was a fresh checkout).",
+            "",
+        ]
+    )
+    out = Path(config.out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    (out / f"sim_sensing{config.tag}.md").write_text(text)
+    print(text)
+    return figures
 
 
 def _header(config, title, source, started, path) -> list[str]:
@@ -873,7 +990,8 @@ def parse_args(argv=None) -> Config:
         "--experiment",
         action="append",
         choices=EXPERIMENTS,
-        help="with --source sim: catalog (Tables 4.6-4.7) and/or solids (Table 4.5)",
+        help="with --source sim: catalog (Tables 4.6-4.7), solids (Table 4.5) and/or "
+        "sensing (sensed points against the meshes, wall times)",
     )
     p.add_argument("--sessions", type=int, default=3, help="with --source sim: seeds per object")
     p.add_argument("--object", action="append", help="with --source sim: probe only these")

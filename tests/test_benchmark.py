@@ -1,6 +1,7 @@
 """The benchmark runner: resuming after a kill, the process pool and Ray give the same
 records as a serial run, simulated instances, and the script's bad-input exits."""
 
+import dataclasses
 import json
 import os
 import signal
@@ -270,3 +271,21 @@ def test_script_parses_the_sim_options():
     assert config.experiments == ("solids",)
     assert config.sessions == 2
     assert config.tag == "_x"
+
+
+@pytest.mark.slow
+def test_sensing_experiment_measures_points_and_wall_times(tmp_path):
+    script = _script()
+    config = script.parse_args(
+        ["--source", "sim", "--experiment", "sensing", "--sessions", "1", "--object", "bird"]
+    )
+    config = dataclasses.replace(config, out_dir=tmp_path, json_path=tmp_path / "sensing.json")
+    figures = script.run(config)["sensing"]
+    assert figures["n_points"] == 63
+    assert figures["objects"]["bird"]["n_points"] == 63
+    # Sensed points lie on the surface to within the sensor's error (tenths of a mm).
+    assert 0 < figures["distance_to_mesh_mean_mm"] < 0.1
+    assert len(figures["probe_script_warm_s"]) == 3
+    assert all(t > 0 for t in figures["session_total_s"])
+    assert "| bird | 63 |" in (tmp_path / "sim_sensing.md").read_text()
+    assert json.loads((tmp_path / "sensing.json").read_text())["sensing"]["n_points"] == 63
