@@ -1,0 +1,64 @@
+"""scripts/probe.py end to end: probe, recognise, report, save; bad input exits 2."""
+
+import importlib.util
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+from recognition import DataCurves
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _probe_script():
+    name = "scripts_probe"
+    if name not in sys.modules:
+        spec = importlib.util.spec_from_file_location(name, ROOT / "scripts" / "probe.py")
+        module = importlib.util.module_from_spec(spec)
+        sys.modules[name] = module
+        spec.loader.exec_module(module)
+    return sys.modules[name]
+
+
+def test_pose_error_is_the_rotation_angle_and_the_mean_displacement_of_the_data():
+    probe = _probe_script()
+    rng = np.random.default_rng(0)
+    points = rng.normal(scale=0.01, size=(30, 3))
+    T = np.eye(4)
+    T[:3, :3] = Rotation.from_rotvec(rng.normal(size=3)).as_matrix()
+    T[:3, 3] = (0.4, 0.1, 0.0)
+    assert probe.pose_error(T, T, points) == pytest.approx((0.0, 0.0), abs=1e-6)
+    shifted = T.copy()
+    shifted[:3, 3] += (0.0, 0.0, 0.002)
+    assert probe.pose_error(shifted, T, points) == pytest.approx((0.0, 0.002), abs=1e-6)
+    turned = T.copy()
+    turned[:3, :3] = Rotation.from_euler("z", 10, degrees=True).as_matrix() @ T[:3, :3]
+    angle, shift = probe.pose_error(turned, T, points)
+    assert angle == pytest.approx(10.0)
+    assert 0 < shift < 0.01
+
+
+@pytest.mark.slow
+def test_probing_an_object_recognises_it_and_saves_its_curves(tmp_path, capsys):
+    probe = _probe_script()
+    config = probe.parse_args(["--object", "bird", "--seed", "1", "--rerun", "off"])
+    summary = probe.run(probe.Config(**{**vars(config), "out": tmp_path}))
+    assert summary["recognized"] == "bird" and summary["correct"]
+    assert summary["location_error_mm"] < 2.0
+    ranking = [e for _, e in summary["ranking_mm"] if e is not None]
+    assert ranking == sorted(ranking)
+    curves = DataCurves.load(summary["curves_file"])
+    assert [len(c) for c in curves.curves] == [21, 21, 21]
+    out = capsys.readouterr().out
+    assert "recognised as bird (correct)" in out and "timings:" in out
+
+
+def test_an_unknown_object_lists_the_known_ones_and_exits_2(tmp_path, capsys):
+    probe = _probe_script()
+    assert probe.main(["--object", "unicorn", "--rerun", "off", "--out", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1
+    assert "unicorn" in err and "cat" in err and "elephant" in err
