@@ -25,7 +25,7 @@ from recognition.curves.recognition import (
 )
 from recognition.curves.sampling import random_curve, random_rigid_motion, sample_by_arc_length
 from recognition.errors import InvalidCurveData, RecognitionError
-from recognition.reproduction.tables import TableResult, markdown_table
+from recognition.reproduction.tables import TableResult, markdown_table, save_figure
 
 __all__ = [
     "CLASSES",
@@ -885,7 +885,7 @@ def figures(out_dir: Path, joystick: JoystickExperiment = JoystickExperiment()) 
     ax[0].set(title="(a) y = 0.6 x^3 + 0.4 x", xlabel="x", ylabel="y", aspect="equal")
     ax[1].plot(*_signature(curve, t))
     ax[1].set(title="(b) signature curve", xlabel="kappa", ylabel="kappa_s")
-    paths.append(_save(fig, out_dir / "fig3_1_cubical_parabola_signature.png"))
+    paths.append(save_figure(fig, out_dir / "fig3_1_cubical_parabola_signature.png"))
 
     # Fig. 3.2: three parabolas, signatures, I_p along each
     fig, ax = plt.subplots(1, 3, figsize=(13, 4))
@@ -904,7 +904,7 @@ def figures(out_dir: Path, joystick: JoystickExperiment = JoystickExperiment()) 
     ax[1].set(title="(b) signature curves", xlabel="kappa", ylabel="kappa_s")
     ax[2].set(title="(c) I_p along each curve", xlabel="t", ylabel="I_p")
     ax[2].legend()
-    paths.append(_save(fig, out_dir / "fig3_2_parabolas.png"))
+    paths.append(save_figure(fig, out_dir / "fig3_2_parabolas.png"))
 
     # Fig. 3.3: two ellipses and a circle, signatures, (I_c1, I_c2)
     fig, ax = plt.subplots(1, 3, figsize=(13, 4))
@@ -928,7 +928,7 @@ def figures(out_dir: Path, joystick: JoystickExperiment = JoystickExperiment()) 
     ax[0].legend(fontsize=8)
     ax[1].set(title="(b) signature curves", xlabel="kappa", ylabel="kappa_s")
     ax[2].set(title="(c) (I_c1, I_c2) from pairs of points", xlabel="I_c1", ylabel="I_c2")
-    paths.append(_save(fig, out_dir / "fig3_3_ellipses.png"))
+    paths.append(save_figure(fig, out_dir / "fig3_3_ellipses.png"))
 
     # Fig. 3.7: estimates from joystick-like samples against the signature curve
     g = joystick_ellipse_estimates(joystick, 0)
@@ -942,17 +942,8 @@ def figures(out_dir: Path, joystick: JoystickExperiment = JoystickExperiment()) 
     ax[1].plot(g.kappa, g.kappa_s, "o", ms=4, label="estimates from noisy samples")
     ax[1].set(title="(b) estimates vs signature", xlabel="kappa", ylabel="kappa_s")
     ax[1].legend()
-    paths.append(_save(fig, out_dir / "fig3_7_estimates_vs_signature.png"))
+    paths.append(save_figure(fig, out_dir / "fig3_7_estimates_vs_signature.png"))
     return paths
-
-
-def _save(fig, path: Path) -> Path:
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    import matplotlib.pyplot as plt
-
-    plt.close(fig)
-    return path
 
 
 def default_experiment(**overrides) -> CurveExperiment:

@@ -28,7 +28,7 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from recognition.reproduction.tables import TableResult, markdown_table
+from recognition.reproduction.tables import TableResult, markdown_table, save_figure
 from recognition.surfaces import closed_form as cf
 from recognition.surfaces.data_curves import DataCurves
 from recognition.synthetic import (
@@ -744,7 +744,7 @@ def figures(
         ax.plot([best], [e], "o", color="k", ms=4)
     ax.set(xlabel="phi (rad)", ylabel="E (4.11)", title="Fig. 4.3: E against phi (ellipsoid)")
     ax.legend()
-    paths.append(_save(fig, out_dir / "fig4_3_error_vs_phi.png"))
+    paths.append(save_figure(fig, out_dir / "fig4_3_error_vs_phi.png"))
 
     # Fig. 4.5: data curves at their true place and as registered
     surface, curves, _, T_true, _ = _fig_4_5_data(experiment)
@@ -761,7 +761,7 @@ def figures(
         ax.plot(*true.T, "k-", lw=3)
         ax.plot(*reg.T, "--", color="tab:red", lw=1.5)
     ax.set(title="Fig. 4.5: data curves at p (black) and registered (red, dashed)")
-    paths.append(_save(fig, out_dir / "fig4_5_worked_example.png"))
+    paths.append(save_figure(fig, out_dir / "fig4_5_worked_example.png"))
 
     # Fig. 4.7: true p (dots) and estimates p* (crosses), symmetric copy nearest p
     records = surface_instances(experiment, workers)
@@ -779,17 +779,8 @@ def figures(
             ax.plot(*est, "x", color="tab:red", ms=7)
         ax.set(title=f"({'abcd'[i]}) {s.name.replace('_', ' ')}")
     fig.suptitle("Fig. 4.7: true p (dots) and estimated p* (crosses)")
-    paths.append(_save(fig, out_dir / "fig4_7_registration_instances.png"))
+    paths.append(save_figure(fig, out_dir / "fig4_7_registration_instances.png"))
     return paths
-
-
-def _save(fig, path: Path) -> Path:
-    import matplotlib.pyplot as plt
-
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
 
 
 def default_experiment(**overrides) -> SurfaceExperiment:

@@ -5,9 +5,10 @@ from __future__ import annotations
 import json
 import math
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
-__all__ = ["TableResult", "markdown_table"]
+__all__ = ["TableResult", "markdown_table", "save_figure"]
 
 
 @dataclass(frozen=True)
@@ -79,3 +80,13 @@ def markdown_table(header: list[str], rows: list[list], digits: int = 5) -> str:
     lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
     lines += ["| " + " | ".join(_cell(v, digits) for v in row) + " |" for row in rows]
     return "\n".join(lines)
+
+
+def save_figure(fig, path: Path) -> Path:
+    """Writes a matplotlib figure as a PNG (tight layout, 110 dpi), closes it, returns path."""
+    import matplotlib.pyplot as plt
+
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
