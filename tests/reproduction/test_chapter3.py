@@ -58,3 +58,15 @@ def test_reproduce_script_writes_json_and_rejects_bad_input(tmp_path, capsys):
     with pytest.raises(SystemExit) as exc:
         reproduce_thesis.main(["--curves", "0"])
     assert exc.value.code == 2
+
+
+def test_figures_are_written(tmp_path):
+    paths = chapter3.figures(tmp_path, chapter3.JoystickExperiment())
+    assert [p.name for p in paths] == [
+        "fig3_1_cubical_parabola_signature.png",
+        "fig3_2_parabolas.png",
+        "fig3_3_ellipses.png",
+        "fig3_7_estimates_vs_signature.png",
+    ]
+    for p in paths:
+        assert p.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
