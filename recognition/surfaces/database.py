@@ -8,7 +8,7 @@ import tempfile
 import time
 from collections.abc import Callable, Mapping
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -16,21 +16,25 @@ import trimesh
 
 from recognition.errors import InvalidModel
 from recognition.surfaces.data_curves import DataCurves
-from recognition.surfaces.distance import DistanceField
-from recognition.surfaces.local_geometry import LocalSurfaceGeometry, local_surface_geometry
+from recognition.surfaces.distance import DistanceField, FieldStack
+from recognition.surfaces.local_geometry import LocalSurfaceGeometry
 from recognition.surfaces.mesh_model import CurvatureTable, MeshModel, MeshModelConfig
 from recognition.surfaces.registration import (
     Registration,
     RegistrationConfig,
     RegistrationMode,
+    data_geometry,
     register,
+    register_fast,
+    registration_mode,
 )
 
 __all__ = ["DATABASE_FORMAT", "ModelDatabase", "Recognition"]
 
 #: Version of the on-disk format; a different version is rebuilt, never read.
 DATABASE_FORMAT = 3
-#: Models whose registration error is computed exactly (the best by field error).
+#: Thesis and ICP modes: models whose registration error is computed exactly (the best
+#: by their own error); the fast mode decides which models to polish itself.
 EXACT_TOP = 3
 #: Default largest registration error (metres) of a recognised model: data that fit no
 #: model better than this are not recognised (name None).
@@ -120,10 +124,18 @@ class ModelDatabase:
         self.threads = threads
         #: Where the database was loaded from (None if built in memory).
         self.directory: Path | None = None
+        self._stack: FieldStack | None = None
 
     @property
     def names(self) -> list[str]:
         return list(self.models)
+
+    @property
+    def field_stack(self) -> FieldStack:
+        """Every model's distance field in one stack, in :attr:`names` order (cached)."""
+        if self._stack is None:
+            self._stack = FieldStack.of([m.distance_field for m in self.models.values()])
+        return self._stack
 
     def __len__(self) -> int:
         return len(self.models)
@@ -279,36 +291,22 @@ class ModelDatabase:
             Restrict recognition to these models.
         """
         start = time.perf_counter()
-        geometry = local_surface_geometry(curves)
+        mode = registration_mode(mode or self.mode)
+        geometry = data_geometry(curves, self.registration)
         names = models or self.names
-
-        def one(name):
-            return register(
-                self.models[name],
+        if mode is RegistrationMode.FAST:
+            index = {n: i for i, n in enumerate(self.names)}
+            found = register_fast(
+                [self.models[n] for n in names],
                 curves,
-                mode=mode or self.mode,
-                config=self.registration,
-                geometry=geometry,
-                exact=False,
+                geometry,
+                self.registration,
+                stack=self.field_stack,
+                which_field=np.array([index[n] for n in names]),
             )
-
-        if self.threads > 1 and len(names) > 1:
-            with ThreadPoolExecutor(self.threads) as pool:
-                registrations = dict(zip(names, pool.map(one, names), strict=True))
+            registrations = dict(zip(names, found, strict=True))
         else:
-            registrations = {name: one(name) for name in names}
-        # exact errors for the models that can win (the best one's pose polished on exact
-        # closest points); the rest stay field-based (within about 0.01 mm, far from best)
-        order = sorted(registrations.items(), key=lambda kv: kv[1].error_m)[:EXACT_TOP]
-        for rank, (name, _) in enumerate(order):
-            start_exact = time.perf_counter()
-            registrations[name] = registrations[name].with_exact_error(
-                self.models[name], curves, refine=rank == 0, point=geometry.point
-            )
-            registrations[name] = replace(
-                registrations[name],
-                time_s=registrations[name].time_s + time.perf_counter() - start_exact,
-            )
+            registrations = self._register_each(curves, names, mode, geometry)
         ranking = sorted(
             ((n, r.error_m) for n, r in registrations.items()), key=lambda item: item[1]
         )
@@ -327,6 +325,31 @@ class ModelDatabase:
             time.perf_counter() - start,
             geometry,
         )
+
+    def _register_each(self, curves, names, mode, geometry) -> dict[str, Registration]:
+        """Thesis and ICP modes: each model on its own; the best few get exact errors."""
+
+        def one(name):
+            return register(
+                self.models[name],
+                curves,
+                mode=mode,
+                config=self.registration,
+                geometry=geometry,
+                exact=False,
+            )
+
+        if self.threads > 1 and len(names) > 1:
+            with ThreadPoolExecutor(self.threads) as pool:
+                registrations = dict(zip(names, pool.map(one, names), strict=True))
+        else:
+            registrations = {name: one(name) for name in names}
+        order = sorted(registrations.items(), key=lambda kv: kv[1].error_m)[:EXACT_TOP]
+        for rank, (name, _) in enumerate(order):
+            registrations[name] = registrations[name].with_exact_error(
+                self.models[name], curves, refine=rank == 0, point=geometry.point
+            )
+        return registrations
 
 
 def _safe(name: str) -> str:

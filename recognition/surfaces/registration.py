@@ -1,14 +1,22 @@
-"""Registration of three data curves on a mesh model (thesis Sections 4.1.2, 4.3.3).
+"""Registration of three data curves on mesh models (thesis Sections 4.1.2, 4.3.3).
 
-Three modes behind :func:`register`:
+Three modes behind :func:`register` (one model) and
+:meth:`recognition.surfaces.database.ModelDatabase.recognize` (all models):
 
 ``fast`` (default)
-    Table lookup (4.7); every candidate vertex x every rotation phi about the normal
-    (superposition of Section 4.1.2.2) is scored in one vectorised batch on the model's
-    narrow-band signed distance field with a subset of the data points; the best poses
-    are refined together by Gauss-Newton over all six degrees of freedom (p slides on
-    the surface, the curves turn about and tilt off the normal) on every data point.
-    The reported error is the mean exact point-to-surface distance (4.8).
+    Table lookup (4.7) in a per-vertex curvature map thinned to one candidate per cell;
+    at each candidate the data are superposed (p on the vertex, N on its normal, Section
+    4.1.2.2) at rotations phi about the normal: a window around the alignment of the
+    principal directions where both data and model are clearly anisotropic, a full scan
+    elsewhere. Every (candidate, phi) pose of every model is screened in one vectorised
+    batch on the models' narrow-band signed distance fields with a few points per arm of
+    the data; the best poses of each model slide into their basins by batched
+    Gauss-Newton over all six degrees of freedom on ever more points, near-duplicates
+    dropped between stages. A model whose coarse fit is far worse than the best model's
+    stops there. The reported error is the mean point-to-surface distance (4.8), exact
+    (closest points on the triangles) for the models that can win. When even the best
+    model fits worse than the data's own noise explains, the search is repeated more
+    densely (:attr:`RegistrationConfig.fallback`).
 ``thesis``
     The thesis's method: superposition by intersecting the three sampling planes with
     the mesh and resampling at the data's spacing (4.15), phi in 10-degree steps, then
@@ -22,6 +30,7 @@ Three modes behind :func:`register`:
 from __future__ import annotations
 
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from enum import StrEnum
 
@@ -30,16 +39,30 @@ from scipy.spatial.transform import Rotation
 
 from recognition.errors import InvalidCurveData
 from recognition.surfaces.data_curves import DataCurves
+from recognition.surfaces.distance import FieldStack
 from recognition.surfaces.local_geometry import LocalSurfaceGeometry, local_surface_geometry
 from recognition.surfaces.mesh_model import MeshModel
 
 __all__ = [
+    "FastSearchConfig",
     "Registration",
     "RegistrationConfig",
     "RegistrationMode",
     "RegistrationStatus",
+    "acceptable_error_m",
+    "data_geometry",
+    "data_noise_m",
+    "refine_exact",
     "register",
+    "register_fast",
+    "registration_mode",
 ]
+
+
+#: Poses closer than this (p's image, metres) and ...
+DISTINCT_RADIUS_M = 0.5e-3
+#: ... turned less than this from a better pose are near-duplicates (fast mode).
+DISTINCT_ANGLE_RAD = float(np.deg2rad(3.0))
 
 
 class RegistrationMode(StrEnum):
@@ -52,6 +75,72 @@ class RegistrationStatus(StrEnum):
     CONVERGED = "converged"
     MAX_ITERATIONS = "max_iterations"
     NO_CANDIDATES = "no_candidates"  # rejected at table lookup
+    PRUNED = "pruned"  # fast mode: stopped after the coarse stage, far worse than the best
+
+
+@dataclass(frozen=True)
+class FastSearchConfig:
+    """How densely one pass of the fast mode searches a model.
+
+    Attributes
+    ----------
+    tolerance_scale : float
+        Multiplies the table-lookup tolerance of :class:`RegistrationConfig`; ``inf``:
+        every vertex is a candidate (curvature estimates fail on sharp creases).
+    candidate_spacing_m : float
+        Candidate vertices are thinned to one per cubic cell of this side (the vertex
+        nearest the data in (k1, k2)), metres.
+    aligned_anisotropy : float
+        k1 - k2 (1/m) above which, for both the data and a candidate, phi is searched
+        only near the alignment of their principal directions; ``inf``: always scan.
+    aligned_window_rad, aligned_step_rad : float
+        Half width and step of that window around both alignments (phi and phi + pi).
+    scan_step_rad : float
+        Step of the full scan of phi over [0, 2 pi).
+    prescreen_fractions : tuple of float
+        Prescreening points: on each of the six arms (p to a curve's end), the data
+        points at these fractions of the arm's length.
+    prescreen_keep : float
+        Fraction of the poses (of a model, phi set and normal orientation) kept after
+        prescreening, but at least ``n_screened``.
+    arm_fractions : tuple of float
+        Screening points, as ``prescreen_fractions``.
+    n_screened : int
+        Poses per model kept after screening; each takes ``screen_iterations``
+        Gauss-Newton steps on the screening points.
+    n_coarse, coarse_per_arm, coarse_iterations
+        Distinct poses per model kept next, refined on ``coarse_per_arm`` points per arm.
+    n_final, final_iterations
+        Distinct poses per model refined on every data point.
+    """
+
+    tolerance_scale: float = 1.0
+    candidate_spacing_m: float = 2.5e-3
+    aligned_anisotropy: float = 20.0
+    aligned_window_rad: float = float(np.deg2rad(24.0))
+    aligned_step_rad: float = float(np.deg2rad(8.0))
+    scan_step_rad: float = float(np.deg2rad(10.0))
+    prescreen_fractions: tuple[float, ...] = (2 / 3,)
+    prescreen_keep: float = 0.1
+    arm_fractions: tuple[float, ...] = (1 / 3, 2 / 3, 1.0)
+    n_screened: int = 128
+    screen_iterations: int = 4
+    n_coarse: int = 48
+    coarse_per_arm: int = 8
+    coarse_iterations: int = 4
+    n_final: int = 4
+    final_iterations: int = 25
+
+
+#: The denser pass run when no model fits well enough (see RegistrationConfig.fallback).
+THOROUGH_SEARCH = FastSearchConfig(
+    tolerance_scale=float("inf"),
+    candidate_spacing_m=2.0e-3,
+    aligned_anisotropy=float("inf"),
+    n_screened=384,
+    n_coarse=96,
+    n_final=8,
+)
 
 
 @dataclass(frozen=True)
@@ -65,24 +154,28 @@ class RegistrationConfig:
     relative_delta : float
         Fast mode: the tolerance grows by this fraction of the data's largest |k|; the
         estimates of both data and model disagree more where the curvature is high.
-    n_phi : int
-        Fast mode: rotations about the normal scored per candidate when the data are
-        nearly umbilic (k1 - k2 <= ``anisotropy``); otherwise phi is scanned +-30 degrees
-        around the two alignments of the principal directions.
-    anisotropy : float
-        k1 - k2 (1/m) above which principal directions are trusted.
-    candidate_spacing_m : float
-        Fast mode: candidate vertices are thinned to one per cell of this size.
-    sparse_points, n_screened
-        Fast mode stage 1: data points scored at every candidate pose (nearest voxel),
-        and the best poses kept; stage 2 runs ``screen_iterations`` Gauss-Newton steps on
-        them with the same points.
-    n_refined_coarse, coarse_points
-        Stage 3: the best poses after stage 2 and the data points they are refined on.
-    n_refined, iterations
-        Stage 4: the best poses after stage 3, refined on every data point.
-    iterations : int
-        Gauss-Newton / ICP iterations at most.
+    fit_half_length_m, fit_spacings, fit_degree
+        The data's local geometry (4.1)-(4.6): each curve is fitted by a polynomial of
+        ``fit_degree`` over the arc within max(``fit_half_length_m``, ``fit_spacings``
+        point spacings) of p, the scale of the models' paraboloid fits (4.14).
+    search : FastSearchConfig
+        Fast mode: the first pass.
+    fallback : FastSearchConfig or None
+        Fast mode: a denser pass over the models not rejected at table lookup (by default
+        over their whole surface, since curvature estimates fail on sharp creases), run
+        when the best error of the first pass exceeds :func:`acceptable_error_m`; None:
+        never.
+    accept_noise_factor, accept_floor_m
+        A fit is good enough when its mean error is at most ``accept_noise_factor``
+        times the mean distance that the data's noise alone gives (sqrt(2/pi) sigma)
+        plus ``accept_floor_m``.
+    prune_ratio : float or None
+        Fast mode: a model whose best coarse RMS residual exceeds this multiple of the
+        best model's stops before the final stage; None: never.
+    polish_ratio, polish_margin_m, polish_iterations
+        Models whose distance-field error is within ``polish_ratio`` times the best plus
+        ``polish_margin_m`` are polished on exact closest points (at most
+        ``polish_iterations`` steps of :func:`refine_exact`) and get exact errors.
     thesis_phi_step_deg : float
         Rotation step of the thesis mode (thesis: 10 degrees).
     thesis_max_candidates : int
@@ -91,24 +184,28 @@ class RegistrationConfig:
         Starting rotations per candidate for the ICP baseline.
     icp_max_candidates : int
         Candidates (nearest in (k1, k2) first) started by the ICP baseline.
+    icp_iterations : int
+        ICP iterations at most per start.
     """
 
     delta: float = 30.0
     relative_delta: float = 0.3
-    n_phi: int = 24
-    anisotropy: float = 15.0
-    candidate_spacing_m: float = 4.0e-3
-    sparse_points: int = 9
-    n_screened: int = 384
-    n_refined_coarse: int = 48
-    coarse_points: int = 30
-    screen_iterations: int = 3
-    n_refined: int = 3
-    iterations: int = 8
+    fit_half_length_m: float = 3.0e-3
+    fit_spacings: float = 3.2
+    fit_degree: int = 3
+    search: FastSearchConfig = FastSearchConfig()
+    fallback: FastSearchConfig | None = THOROUGH_SEARCH
+    accept_noise_factor: float = 1.5
+    accept_floor_m: float = 5.0e-6
+    prune_ratio: float | None = 4.0
+    polish_ratio: float = 1.5
+    polish_margin_m: float = 0.01e-3
+    polish_iterations: int = 3
     thesis_phi_step_deg: float = 10.0
     thesis_max_candidates: int = 20
     icp_phi: int = 8
     icp_max_candidates: int = 25
+    icp_iterations: int = 8
 
 
 @dataclass(frozen=True)
@@ -130,6 +227,8 @@ class Registration:
     iterations : int
     status : RegistrationStatus
     time_s : float
+        Wall time; in a search of several models at once, this model's share of the
+        batched work (in proportion to the point evaluations made for it).
     mode : RegistrationMode
     trace : tuple of float
         Error after each refinement step of the best start (diagnostics).
@@ -151,18 +250,26 @@ class Registration:
     error_is_exact: bool = True
 
     def with_exact_error(
-        self, model: MeshModel, curves: DataCurves, refine: bool = False, point=None
+        self,
+        model: MeshModel,
+        curves: DataCurves,
+        refine: bool = False,
+        point=None,
+        iterations: int = 12,
     ) -> Registration:
         """This registration with its error computed exactly (if it was not).
 
-        With ``refine``, the pose is first polished by point-to-plane Gauss-Newton on exact
-        closest points (:func:`refine_exact`); ``point`` (the data's p) then moves with it.
+        With ``refine``, the pose is first polished on exact closest points by at most
+        ``iterations`` steps of :func:`refine_exact`; ``point`` (the data's p) then moves
+        with it.
+        The time taken is added to ``time_s``.
         """
         if self.error_is_exact or not np.isfinite(self.error_m):
             return self
+        start = time.perf_counter()
         R, t = self.T_model_from_data[:3, :3], self.T_model_from_data[:3, 3]
         if refine:
-            R, t, error = refine_exact(model, curves.points, R, t)
+            R, t, error = refine_exact(model, curves.points, R, t, iterations)
             location = self.location if point is None else R @ point + t
             return replace(
                 self,
@@ -170,12 +277,18 @@ class Registration:
                 error_is_exact=True,
                 T_model_from_data=_pose_matrix(R, t),
                 location=location,
+                time_s=self.time_s + time.perf_counter() - start,
             )
         error = float(np.mean(model.distance.closest(curves.points @ R.T + t)[0]))
-        return replace(self, error_m=error, error_is_exact=True)
+        return replace(
+            self,
+            error_m=error,
+            error_is_exact=True,
+            time_s=self.time_s + time.perf_counter() - start,
+        )
 
 
-def _rejected(model, mode, start, candidates=None) -> Registration:
+def _rejected(model, mode, start, candidates=None, elapsed=None) -> Registration:
     nan = np.full(3, np.nan)
     candidates = np.zeros(0, np.int64) if candidates is None else candidates
     return Registration(
@@ -186,9 +299,60 @@ def _rejected(model, mode, start, candidates=None) -> Registration:
         candidates,
         0,
         RegistrationStatus.NO_CANDIDATES,
-        time.perf_counter() - start,
+        time.perf_counter() - start if elapsed is None else elapsed,
         mode,
     )
+
+
+# --- the data's local geometry and noise ----------------------------------------------
+
+
+def _median_spacing(curves: DataCurves) -> float:
+    steps = [np.linalg.norm(np.diff(c, axis=0), axis=1) for c in curves.curves]
+    return float(np.median(np.concatenate(steps)))
+
+
+def data_geometry(
+    curves: DataCurves, config: RegistrationConfig = RegistrationConfig()
+) -> LocalSurfaceGeometry:
+    """Normal and principal curvatures at p (thesis Eqs. (4.1)-(4.6)) at the models' scale.
+
+    Each curve is fitted over the arc within max(``fit_half_length_m``, ``fit_spacings``
+    x the point spacing) of p by a polynomial of degree ``fit_degree``: about the
+    neighbourhood of the models' paraboloid fits (4.14), and at least three points
+    either side of p when the points are sparse (the thesis's real data: 1.2 mm apart).
+    """
+    half_length = max(config.fit_half_length_m, config.fit_spacings * _median_spacing(curves))
+    return local_surface_geometry(curves, half_length_m=half_length, degree=config.fit_degree)
+
+
+def data_noise_m(curves: DataCurves) -> float:
+    """Standard deviation of the data's noise, from the residuals of each curve's plane.
+
+    Every data curve lies in its sampling plane; with isotropic noise of standard
+    deviation sigma, the residuals of a least-squares plane have a mean square of
+    sigma^2 (n - 3) / n.
+    """
+    total, dof = 0.0, 0
+    for c in curves.curves:
+        centred = c - c.mean(axis=0)
+        normal = np.linalg.svd(centred, full_matrices=False)[2][-1]
+        residual = centred @ normal
+        total += float(residual @ residual)
+        dof += max(len(c) - 3, 1)
+    return float(np.sqrt(total / dof))
+
+
+def acceptable_error_m(noise_m: float, config: RegistrationConfig = RegistrationConfig()) -> float:
+    """Largest registration error that the data's noise explains (see RegistrationConfig).
+
+    For points displaced by Gaussian noise of standard deviation sigma, the mean distance
+    to the surface they were sampled on is sqrt(2/pi) sigma.
+    """
+    return config.accept_noise_factor * np.sqrt(2 / np.pi) * noise_m + config.accept_floor_m
+
+
+# --- shared helpers -------------------------------------------------------------------
 
 
 def _hypotheses(geometry: LocalSurfaceGeometry) -> list[LocalSurfaceGeometry]:
@@ -205,116 +369,161 @@ def _candidates(model: MeshModel, geometry: LocalSurfaceGeometry, delta: float):
 
 
 def _model_frames(model: MeshModel, rows: np.ndarray) -> np.ndarray:
-    """(k, 3, 3) frames (d1, d2, n) at candidate vertices: principal direction and normal."""
+    """(k, 3, 3) frames (d1, d2, n) at table rows: principal direction and normal."""
     table = model.table
-    v = table.vertex[rows]
-    n = model.normals[v]
-    t1 = table.d1[rows] - n * np.einsum("ij,ij->i", table.d1[rows], n)[:, None]
+    return _frames(model.normals[table.vertex[rows]], table.d1[rows])
+
+
+def _frames(normals: np.ndarray, directions: np.ndarray) -> np.ndarray:
+    """(k, 3, 3) right-handed frames whose columns are (t1, n x t1, n), t1 the direction
+    made tangent (any tangent where it is parallel to the normal)."""
+    t1 = directions - normals * np.einsum("ij,ij->i", directions, normals)[:, None]
     bad = np.linalg.norm(t1, axis=1) < 1e-9
     if bad.any():
-        helper = np.where(np.abs(n[bad, :1]) < 0.9, [[1.0, 0, 0]], [[0, 1.0, 0]])
-        t1[bad] = np.cross(n[bad], helper)
+        helper = np.where(np.abs(normals[bad, :1]) < 0.9, [[1.0, 0, 0]], [[0, 1.0, 0]])
+        t1[bad] = np.cross(normals[bad], helper)
     t1 /= np.linalg.norm(t1, axis=1, keepdims=True)
-    return np.stack([t1, np.cross(n, t1), n], axis=-1)
+    return np.stack([t1, np.cross(normals, t1), normals], axis=-1)
 
 
 def _rot_z(phi: np.ndarray) -> np.ndarray:
     c, s = np.cos(phi), np.sin(phi)
-    R = np.zeros((*phi.shape, 3, 3))
+    R = np.zeros((*np.shape(phi), 3, 3))
     R[..., 0, 0], R[..., 0, 1], R[..., 1, 0], R[..., 1, 1] = c, -s, s, c
     R[..., 2, 2] = 1.0
     return R
 
 
 def _superposition_poses(model, rows, geometry, phis):
-    """Poses (R, t) putting p on each candidate, N on its normal, turned by each phi.
+    """Poses (R, t) putting p on each table row's vertex, N on its normal, turned by phi.
 
     Returns R (k, f, 3, 3), t (k, f, 3) mapping data-frame points to the model frame.
     """
     frames = _model_frames(model, rows)  # (k, 3, 3)
-    data_frame = geometry.frame  # columns d1, d2, N in data coordinates
-    R = frames[:, None] @ _rot_z(phis)[None] @ data_frame.T[None, None]
+    R = frames[:, None] @ _rot_z(phis)[None] @ geometry.frame.T[None, None]
     x = model.vertices[model.table.vertex[rows]]
     t = x[:, None, :] - np.einsum("kfij,j->kfi", R, geometry.point)
     return R, t
-
-
-def _spread_subset(curves: DataCurves, count: int) -> np.ndarray:
-    """Indices into ``curves.points`` of about ``count`` points spread along every curve."""
-    idx, offset = [], 0
-    per = max(count // len(curves.curves), 2)
-    for c in curves.curves:
-        idx.append(offset + np.unique(np.linspace(0, len(c) - 1, per).round().astype(int)))
-        offset += len(c)
-    return np.concatenate(idx)
-
-
-def _gauss_newton(field, points, R, t, iterations):
-    """Batched Gauss-Newton (Levenberg damping) of poses on the signed distance field.
-
-    Minimises sum_i sdf(R q_i + t)^2 for each of the B starts; R (B, 3, 3), t (B, 3).
-    Returns R, t, the RMS residual per start and the trace of the best start.
-    """
-    lam = np.full(len(R), 1e-3)
-    pts_T = np.ascontiguousarray(points.T)
-    X = (R @ pts_T).transpose(0, 2, 1) + t[:, None, :]
-    r, g = field.value_and_gradient(X)
-    cost = np.mean(r * r, axis=1)
-    trace = [float(np.sqrt(cost.min()))]
-    eye = np.eye(6)
-    for _ in range(iterations):
-        c = X.mean(axis=1, keepdims=True)
-        J = np.concatenate([np.cross(X - c, g), g], axis=-1)  # (B, n, 6)
-        JT = J.transpose(0, 2, 1)
-        H = JT @ J
-        b = -(JT @ r[..., None])
-        scale = np.trace(H, axis1=1, axis2=2)[:, None, None] / 6 + 1e-12
-        step = np.linalg.solve(H + (lam[:, None, None] * scale) * eye, b)[..., 0]
-        dR = Rotation.from_rotvec(step[:, :3]).as_matrix()
-        R_new = dR @ R
-        t_new = (dR @ (t - c[:, 0])[..., None])[..., 0] + c[:, 0] + step[:, 3:]
-        X_new = (R_new @ pts_T).transpose(0, 2, 1) + t_new[:, None, :]
-        r_new, g_new = field.value_and_gradient(X_new)
-        cost_new = np.mean(r_new * r_new, axis=1)
-        better = cost_new < cost
-        R = np.where(better[:, None, None], R_new, R)
-        t = np.where(better[:, None], t_new, t)
-        X = np.where(better[:, None, None], X_new, X)
-        r = np.where(better[:, None], r_new, r)
-        g = np.where(better[:, None, None], g_new, g)
-        lam = np.where(better, lam * 0.3, lam * 10.0)
-        improvement = (cost - np.minimum(cost, cost_new)) / np.maximum(cost, 1e-300)
-        cost = np.minimum(cost, cost_new)
-        trace.append(float(np.sqrt(cost.min())))
-        if np.all((improvement < 1e-4) & better) or np.all(lam > 1e6):
-            break
-    return R, t, np.sqrt(cost), tuple(trace)
-
-
-def refine_exact(model: MeshModel, points: np.ndarray, R, t, iterations: int = 10):
-    """Point-to-plane Gauss-Newton on exact closest points (the last six-DOF polish).
-
-    Returns R, t and the mean exact distance after refinement.
-    """
-    for _ in range(iterations):
-        X = points @ R.T + t
-        _, q, face = model.distance.closest(X)
-        n = model.distance.face_normals[face]
-        r = np.einsum("ij,ij->i", X - q, n)
-        c = X.mean(axis=0)
-        J = np.concatenate([np.cross(X - c, n), n], axis=1)
-        step = np.linalg.lstsq(J, -r, rcond=None)[0]
-        dR = Rotation.from_rotvec(step[:3]).as_matrix()
-        R, t = dR @ R, dR @ (t - c) + c + step[3:]
-        if np.linalg.norm(step) < 1e-10:
-            break
-    return R, t, float(np.mean(model.distance.closest(points @ R.T + t)[0]))
 
 
 def _pose_matrix(R, t) -> np.ndarray:
     T = np.eye(4)
     T[:3, :3], T[:3, 3] = R, t
     return T
+
+
+def _rotations(w: np.ndarray) -> np.ndarray:
+    """(B, 3, 3) rotation matrices of rotation vectors w (B, 3) (Rodrigues' formula)."""
+    theta = np.linalg.norm(w, axis=1)
+    k = w / np.maximum(theta, 1e-300)[:, None]
+    K = np.zeros((len(w), 3, 3))
+    K[:, 0, 1], K[:, 0, 2], K[:, 1, 2] = -k[:, 2], k[:, 1], -k[:, 0]
+    K[:, 1, 0], K[:, 2, 0], K[:, 2, 1] = k[:, 2], -k[:, 1], k[:, 0]
+    s, c = np.sin(theta)[:, None, None], (1 - np.cos(theta))[:, None, None]
+    return np.eye(3) + s * K + c * (K @ K)
+
+
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    out = np.empty(np.broadcast_shapes(a.shape, b.shape), dtype=np.result_type(a, b))
+    out[..., 0] = a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1]
+    out[..., 1] = a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2]
+    out[..., 2] = a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+    return out
+
+
+# --- fast mode --------------------------------------------------------------------------
+
+
+def _gauss_newton(stack: FieldStack, which, points, R, t, iterations, tolerance=1e-4):
+    """Batched Levenberg-damped Gauss-Newton of poses on signed distance fields.
+
+    Minimises sum_i sdf(R q_i + t)^2 for each of the B starts in its own field
+    ``which`` (B,); R (B, 3, 3), t (B, 3), points (P, 3). A start stops once a step
+    lowers its cost by less than the fraction ``tolerance`` (or its damping exceeds
+    1e6); at most ``iterations`` steps. Returns R, t, the RMS residual per start and the
+    best RMS after each step.
+    """
+    R, t, which = R.copy(), t.copy(), np.asarray(which)
+    lam = np.full(len(R), 1e-3)
+    pts_T = np.ascontiguousarray(points.T)
+    X = (R @ pts_T).transpose(0, 2, 1) + t[:, None, :]
+    r, g = stack.value_and_gradient(X, which)
+    cost = np.mean(r * r, axis=1)
+    trace = [float(np.sqrt(cost.min()))]
+    eye = np.eye(6)
+    active = np.arange(len(R))
+    for _ in range(iterations):
+        Xa, ra, ga = X[active], r[active], g[active]
+        c = Xa.mean(axis=1)
+        J = np.concatenate([_cross(Xa - c[:, None, :], ga), ga], axis=-1)  # (A, P, 6)
+        JT = J.transpose(0, 2, 1)
+        H = JT @ J
+        b = -(JT @ ra[..., None])
+        scale = np.trace(H, axis1=1, axis2=2)[:, None, None] / 6 + 1e-12
+        step = np.linalg.solve(H + (lam[active, None, None] * scale) * eye, b)[..., 0]
+        dR = _rotations(step[:, :3])
+        R_new = dR @ R[active]
+        t_new = (dR @ (t[active] - c)[..., None])[..., 0] + c + step[:, 3:]
+        X_new = (R_new @ pts_T).transpose(0, 2, 1) + t_new[:, None, :]
+        r_new, g_new = stack.value_and_gradient(X_new, which[active])
+        cost_new = np.mean(r_new * r_new, axis=1)
+        better = cost_new < cost[active]
+        moved = active[better]
+        R[moved], t[moved], X[moved] = R_new[better], t_new[better], X_new[better]
+        r[moved], g[moved] = r_new[better], g_new[better]
+        improvement = (cost[active] - cost_new) / np.maximum(cost[active], 1e-300)
+        cost[moved] = cost_new[better]
+        lam[active] = np.where(better, lam[active] * 0.3, lam[active] * 10.0)
+        trace.append(float(np.sqrt(cost.min())))
+        done = (better & (improvement < tolerance)) | (lam[active] > 1e6)
+        active = active[~done]
+        if active.size == 0:
+            break
+    return R, t, np.sqrt(cost), tuple(trace)
+
+
+def refine_exact(
+    model: MeshModel, points: np.ndarray, R, t, iterations: int = 12, tolerance: float = 1e-4
+):
+    """Levenberg-Marquardt on exact closest points: the last six-DOF polish of a pose.
+
+    Each step linearises the distances as point-to-plane residuals on the closest
+    triangles and is kept only if it lowers the mean squared exact distance (so the pose
+    never gets worse, also along the flat directions of nearly symmetric surfaces).
+    Stops when a kept step lowers the mean squared distance by less than the fraction
+    ``tolerance`` or moves no data point by more than 0.1 micrometre, or after
+    ``iterations`` steps. Returns R, t and the mean exact distance (4.8) at the result.
+    """
+    points = np.asarray(points, float)
+    reach = float(np.max(np.linalg.norm(points - points.mean(axis=0), axis=1)))
+    X = points @ R.T + t
+    distance, q, face = model.distance.closest(X)
+    cost = float(np.mean(distance**2))
+    lam = 1e-6
+    for _ in range(iterations):
+        n = model.distance.face_normals[face]
+        r = np.einsum("ij,ij->i", X - q, n)
+        c = X.mean(axis=0)
+        J = np.concatenate([np.cross(X - c, n), n], axis=1)
+        H = J.T @ J
+        damping = lam * (np.trace(H) / 6 + 1e-300)
+        step = np.linalg.solve(H + damping * np.eye(6), -(J.T @ r))
+        dR = Rotation.from_rotvec(step[:3]).as_matrix()
+        R_new, t_new = dR @ R, dR @ (t - c) + c + step[3:]
+        X_new = points @ R_new.T + t_new
+        d_new, q_new, f_new = model.distance.closest(X_new)
+        cost_new = float(np.mean(d_new**2))
+        if cost_new < cost:
+            small = cost - cost_new < tolerance * cost
+            R, t, X, distance, q, face, cost = R_new, t_new, X_new, d_new, q_new, f_new, cost_new
+            lam *= 0.1
+            if small or np.linalg.norm(step[:3]) * reach + np.linalg.norm(step[3:]) < 1e-7:
+                break
+        else:
+            lam *= 100.0
+            if lam > 1e6:
+                break
+    return R, t, float(np.mean(distance))
 
 
 def _dense_candidates(model, geometry, delta, spacing):
@@ -325,7 +534,9 @@ def _dense_candidates(model, geometry, delta, spacing):
     region about evenly.
     """
     pool = model.candidate_pool()
-    rows = pool.query(geometry.k1, geometry.k2, delta)
+    rows = (
+        pool.query(geometry.k1, geometry.k2, delta) if np.isfinite(delta) else np.arange(len(pool))
+    )
     if rows.size == 0:
         return rows
     vertices = pool.vertex[rows]
@@ -337,82 +548,308 @@ def _dense_candidates(model, geometry, delta, spacing):
     return vertices[order[first]]
 
 
-def _phi_grid(geometry, config) -> np.ndarray:
-    """Rotations about the normal to try: around the principal-direction alignments when
-    the data are clearly anisotropic, a uniform scan otherwise."""
-    if geometry.k1 - geometry.k2 > config.anisotropy:
-        offsets = np.deg2rad(np.arange(-30, 31, 15))
-        return np.concatenate([offsets, np.pi + offsets])
-    return np.linspace(0, 2 * np.pi, config.n_phi, endpoint=False)
+def _arm_indices(curves: DataCurves, point: np.ndarray, fractions) -> np.ndarray:
+    """Indices into ``curves.points`` of the points at ``fractions`` of each arm's length.
+
+    An arm runs from the point of a curve nearest p to one of its ends; the result holds,
+    per curve and fraction, the index on the forward arm then on the backward arm.
+    """
+    idx, offset = [], 0
+    for c in curves.curves:
+        m = int(np.argmin(np.linalg.norm(c - point, axis=1)))
+        n = len(c)
+        for f in fractions:
+            idx.append(offset + min(n - 1, m + max(1, round(f * (n - 1 - m)))))
+            idx.append(offset + max(0, m - max(1, round(f * m))))
+        offset += n
+    return np.array(idx, dtype=np.int64)
 
 
-def _superpose(model, vertices, frames_d1, geometry, phis):
-    """Poses putting p on each vertex, N on its normal, d1 on frames_d1 turned by phi."""
-    n = model.normals[vertices]
-    t1 = frames_d1 - n * np.einsum("ij,ij->i", frames_d1, n)[:, None]
-    t1 /= np.maximum(np.linalg.norm(t1, axis=1, keepdims=True), 1e-300)
-    frames = np.stack([t1, np.cross(n, t1), n], axis=-1)
-    R = frames[:, None] @ (_rot_z(phis) @ geometry.frame.T)[None]
-    t = model.vertices[vertices][:, None, :] - R @ geometry.point
-    return R, t
+def _distinct(R, t, rms, point, n_keep, radius=DISTINCT_RADIUS_M, angle=DISTINCT_ANGLE_RAD):
+    """Indices of the ``n_keep`` best poses (least ``rms``), skipping any pose that puts p
+    within ``radius`` of a better kept pose while rotated less than ``angle`` from it."""
+    order = np.argsort(rms, kind="stable")
+    R, location = R[order], R[order] @ point + t[order]
+    near = np.linalg.norm(location[:, None] - location[None], axis=-1) < radius
+    cos_limit = 1 + 2 * np.cos(angle)
+    same = near & (np.einsum("aij,bij->ab", R, R) > cos_limit)
+    alive = np.ones(len(order), bool)
+    kept = []
+    for i in range(len(order)):
+        if alive[i]:
+            kept.append(i)
+            if len(kept) == n_keep:
+                break
+            alive &= ~same[i]
+    return order[np.array(kept, dtype=np.int64)]
 
 
-def _register_fast(model, curves, geometry, config, start, exact=True) -> Registration:
-    points = curves.points
-    sparse = points[_spread_subset(curves, config.sparse_points)]
-    coarse = points[_spread_subset(curves, config.coarse_points)]
-    field = model.distance_field
-    dense = model.vertex_curvatures
-    starts_R, starts_t, all_candidates = [], [], []
+def _smallest(values: np.ndarray, count: int) -> np.ndarray:
+    """Indices of the ``count`` smallest values (all if fewer), in no particular order."""
+    if count >= values.size:
+        return np.arange(values.size)
+    return np.argpartition(values, count - 1)[:count]
+
+
+def _screen(models, stack, which_field, curves, geometry, config, search, log):
+    """Stage 1: candidate poses of every model, scored on the screening points.
+
+    Every pose is first scored on the prescreening points; the best ``prescreen_keep``
+    of them (at least ``n_screened``) are scored again on the screening points. Returns,
+    per model, the best ``n_screened`` poses (R, t) and the candidate vertices.
+    """
+    points = curves.points[_arm_indices(curves, geometry.point, search.arm_fractions)]
+    pre_points = curves.points[_arm_indices(curves, geometry.point, search.prescreen_fractions)]
+    best_R = [[] for _ in models]
+    best_t = [[] for _ in models]
+    best_s = [[] for _ in models]
+    candidates = [[] for _ in models]
+    half = np.arange(
+        -search.aligned_window_rad, search.aligned_window_rad + 1e-9, search.aligned_step_rad
+    )
+    aligned_phis = np.concatenate([half, np.pi + half])
+    scan_phis = np.arange(0.0, 2 * np.pi - 1e-9, search.scan_step_rad)
     for hyp in _hypotheses(geometry):
-        delta = config.delta + config.relative_delta * max(abs(hyp.k1), abs(hyp.k2))
-        vertices = _dense_candidates(model, hyp, delta, config.candidate_spacing_m)
-        all_candidates.append(vertices)
-        if vertices.size == 0:
+        tolerance = search.tolerance_scale * (
+            config.delta + config.relative_delta * max(abs(hyp.k1), abs(hyp.k2))
+        )
+        local = (points - hyp.point) @ hyp.frame  # (P, 3) in the data's (d1, d2, N) frame
+        pre_local = (pre_points - hyp.point) @ hyp.frame
+        data_anisotropic = hyp.k1 - hyp.k2 >= search.aligned_anisotropy
+        for w, model in enumerate(models):
+            start = time.perf_counter()
+            vertices = _dense_candidates(model, hyp, tolerance, search.candidate_spacing_m)
+            candidates[w].append(vertices)
+            if vertices.size == 0:
+                log[w] += time.perf_counter() - start
+                continue
+            dense = model.vertex_curvatures
+            aligned = data_anisotropic & (
+                dense.k1[vertices] - dense.k2[vertices] >= search.aligned_anisotropy
+            )
+            for mask, phis in ((aligned, aligned_phis), (~aligned, scan_phis)):
+                if not mask.any():
+                    continue
+                v = vertices[mask]
+                frames = _frames(model.normals[v], dense.d1[v])
+                turns = _rot_z(phis)
+                patterns = np.einsum("fij,pj->fpi", turns, local)  # (F, P, 3)
+                pre_patterns = np.einsum("fij,pj->fpi", turns, pre_local)
+                which = np.full(len(v), which_field[w])
+                origins = model.vertices[v]
+                pre = np.abs(stack.nearest_in_frames(which, frames, origins, pre_patterns))
+                pre = pre.mean(axis=-1).ravel()
+                count = max(search.n_screened, int(np.ceil(search.prescreen_keep * pre.size)))
+                c, f = np.divmod(_smallest(pre, count), len(phis))
+                score = np.abs(
+                    stack.nearest_in_frames(
+                        which[c], frames[c], origins[c], patterns[f], paired=True
+                    )
+                ).mean(axis=-1)
+                keep = _smallest(score, search.n_screened)
+                c, f, score = c[keep], f[keep], score[keep]
+                R = frames[c] @ turns[f] @ hyp.frame.T
+                best_R[w].append(R)
+                best_t[w].append(origins[c] - R @ hyp.point)
+                best_s[w].append(score)
+            log[w] += time.perf_counter() - start
+    out = []
+    for w in range(len(models)):
+        cands = np.concatenate(candidates[w]) if candidates[w] else np.zeros(0, np.int64)
+        if not best_R[w]:
+            out.append((None, None, cands))
             continue
-        phis = _phi_grid(hyp, config)
-        R, t = _superpose(model, vertices, dense.d1[vertices], hyp, phis)
-        # stage 1: a few points at every candidate pose
-        X = (R.reshape(-1, 3, 3) @ sparse.T).transpose(0, 2, 1) + t.reshape(-1, 1, 3)
-        score = np.mean(np.abs(field.nearest(X)), axis=-1)
-        keep = np.argsort(score)[: config.n_screened]
-        starts_R.append(R.reshape(-1, 3, 3)[keep])
-        starts_t.append(t.reshape(-1, 3)[keep])
-    # the best screened poses of both normal orientations compete from here on
-    candidates = np.concatenate(all_candidates) if all_candidates else np.zeros(0, np.int64)
-    if not starts_R:
-        return _rejected(model.name, RegistrationMode.FAST, start, candidates)
-    R, t = np.concatenate(starts_R), np.concatenate(starts_t)
-    # stages 2-4: ever fewer starts, ever more points: each start slides into its basin
-    # on a few points before the best ones are refined on more
-    stages = (
-        (config.n_screened, sparse, config.screen_iterations),
-        (config.n_refined_coarse, coarse, config.screen_iterations),
-        (config.n_refined, points, config.iterations),
+        R, t, s = (np.concatenate(x) for x in (best_R[w], best_t[w], best_s[w]))
+        keep = np.argsort(s, kind="stable")[: search.n_screened]
+        out.append((R[keep], t[keep], cands))
+    return out
+
+
+def _search(models, stack, curves, geometry, config, search, which_field) -> list[Registration]:
+    """One pass of the fast search over ``models`` (fields ``which_field`` in ``stack``).
+
+    Returns one registration per model, its error read off the distance field.
+    """
+    n = len(models)
+    seconds = np.zeros(n)
+    iterations = np.zeros(n, dtype=np.int64)
+    points = curves.points
+    screen_idx = _arm_indices(curves, geometry.point, search.arm_fractions)
+    fractions = np.arange(1, search.coarse_per_arm + 1) / search.coarse_per_arm
+    coarse_idx = np.unique(_arm_indices(curves, geometry.point, fractions))
+    screened = _screen(models, stack, which_field, curves, geometry, config, search, seconds)
+
+    def batched(poses, stage_points, steps):
+        """Gauss-Newton of every model's poses in one batch; time shared by pose count."""
+        live = [w for w in range(n) if poses[w] is not None]
+        if not live:
+            return poses
+        start = time.perf_counter()
+        owner = np.concatenate([np.full(len(poses[w][0]), w) for w in live])
+        R, t, rms, trace = _gauss_newton(
+            stack,
+            which_field[owner],
+            stage_points,
+            np.concatenate([poses[w][0] for w in live]),
+            np.concatenate([poses[w][1] for w in live]),
+            steps,
+        )
+        counts = np.bincount(owner, minlength=n)
+        seconds[:] += (time.perf_counter() - start) * counts / counts.sum()
+        iterations[live] += len(trace) - 1
+        out = list(poses)
+        for w in live:
+            sel = owner == w
+            out[w] = (R[sel], t[sel], rms[sel])
+        return out
+
+    def distinct(poses, n_keep):
+        out = []
+        for w, p in enumerate(poses):
+            if p is None:
+                out.append(None)
+                continue
+            start = time.perf_counter()
+            keep = _distinct(*p, geometry.point, n_keep)
+            out.append((p[0][keep], p[1][keep]))
+            seconds[w] += time.perf_counter() - start
+        return out
+
+    poses = [None if R is None else (R, t) for R, t, _ in screened]
+    poses = batched(poses, points[screen_idx], search.screen_iterations)
+    poses = batched(distinct(poses, search.n_coarse), points[coarse_idx], search.coarse_iterations)
+    status = [RegistrationStatus.CONVERGED] * n
+    live = [w for w in range(n) if poses[w] is not None]
+    if config.prune_ratio is not None and live:
+        best = min(float(poses[w][2].min()) for w in live)
+        for w in live:
+            if float(poses[w][2].min()) > config.prune_ratio * best:
+                status[w] = RegistrationStatus.PRUNED
+    final = [
+        p if s is RegistrationStatus.CONVERGED else None for p, s in zip(poses, status, strict=True)
+    ]
+    final = batched(distinct(final, search.n_final), points, search.final_iterations)
+    out = []
+    for w, model in enumerate(models):
+        candidates = screened[w][2]
+        source = final[w] if final[w] is not None else poses[w]
+        if source is None:
+            out.append(_rejected(model.name, RegistrationMode.FAST, 0.0, candidates, seconds[w]))
+            continue
+        start = time.perf_counter()
+        b = int(np.argmin(source[2]))
+        R, t = source[0][b], source[1][b]
+        error = float(_field_errors(stack, which_field[[w]], points, R[None], t[None])[0])
+        out.append(
+            Registration(
+                model.name,
+                error,
+                _pose_matrix(R, t),
+                R @ geometry.point + t,
+                candidates,
+                int(iterations[w]),
+                status[w],
+                seconds[w] + time.perf_counter() - start,
+                RegistrationMode.FAST,
+                error_is_exact=False,
+            )
+        )
+    return out
+
+
+def _field_errors(stack, which_field, points, R, t) -> np.ndarray:
+    """Mean |sdf| of the data points at poses R (B, 3, 3), t (B, 3) in fields (B,)."""
+    X = (R @ points.T).transpose(0, 2, 1) + t[:, None, :]
+    return np.mean(np.abs(stack(X, which_field)), axis=1)
+
+
+def register_fast(
+    models: Sequence[MeshModel],
+    curves: DataCurves,
+    geometry: LocalSurfaceGeometry,
+    config: RegistrationConfig = RegistrationConfig(),
+    *,
+    stack: FieldStack | None = None,
+    which_field: np.ndarray | None = None,
+    noise_m: float | None = None,
+) -> list[Registration]:
+    """Fast-mode registration of the curves on several models at once (module docstring).
+
+    Parameters
+    ----------
+    models : sequence of MeshModel
+    curves : DataCurves
+    geometry : LocalSurfaceGeometry
+        The data's local geometry (:func:`data_geometry`).
+    config : RegistrationConfig
+    stack : FieldStack, optional
+        The models' distance fields (built here if not given).
+    which_field : (len(models),) int, optional
+        Index of each model's field in ``stack`` (default: 0, 1, ...).
+    noise_m : float, optional
+        The data's noise (default :func:`data_noise_m`), for the fallback test.
+
+    Returns
+    -------
+    list of Registration
+        One per model, in order. Errors are exact (poses polished on closest points) for
+        the models that can win; the others are read off the distance fields.
+    """
+    models = list(models)
+    if stack is None:
+        stack = FieldStack.of([m.distance_field for m in models])
+    which_field = np.arange(len(models)) if which_field is None else np.asarray(which_field)
+    first = _search(models, stack, curves, geometry, config, config.search, which_field)
+    registrations = _polish(models, curves, geometry, first, config)
+    if config.fallback is None:
+        return registrations
+    noise = data_noise_m(curves) if noise_m is None else noise_m
+    if min(r.error_m for r in registrations) <= acceptable_error_m(noise, config):
+        return registrations
+    # models rejected at table lookup stay rejected: the fallback searches the others
+    kept = [
+        w for w, r in enumerate(registrations) if r.status is not RegistrationStatus.NO_CANDIDATES
+    ]
+    second = _search(
+        [models[w] for w in kept],
+        stack,
+        curves,
+        geometry,
+        config,
+        config.fallback,
+        which_field[kept],
     )
-    rms = np.zeros(len(R))
-    for n_keep, stage_points, iterations in stages:
-        keep = np.argsort(rms, kind="stable")[:n_keep]
-        R, t, rms, trace = _gauss_newton(field, stage_points, R[keep], t[keep], iterations)
-    best = int(np.argmin(rms))
-    R, t = R[best], t[best]
-    if exact:
-        R, t, error = refine_exact(model, points, R, t)
-    else:
-        error = float(np.mean(np.abs(field(points @ R.T + t))))
-    return Registration(
-        model.name,
-        error,
-        _pose_matrix(R, t),
-        R @ geometry.point + t,
-        candidates,
-        len(trace) - 1,
-        RegistrationStatus.CONVERGED,
-        time.perf_counter() - start,
-        RegistrationMode.FAST,
-        trace,
-        exact,
-    )
+    merged = list(registrations)
+    for w, b in zip(kept, second, strict=True):
+        a = registrations[w]
+        better = b if b.error_m < a.error_m else a
+        merged[w] = replace(
+            better,
+            candidates=np.union1d(a.candidates, b.candidates),
+            iterations=a.iterations + b.iterations,
+            time_s=a.time_s + b.time_s,
+        )
+    return _polish(models, curves, geometry, merged, config)
+
+
+def _polish(models, curves, geometry, registrations, config):
+    """Exact errors, poses polished on closest points, for the models that can win."""
+    field_errors = [r.error_m for r in registrations if not r.error_is_exact]
+    exact_errors = [r.error_m for r in registrations if r.error_is_exact]
+    best = min(field_errors + exact_errors, default=float("inf"))
+    if not np.isfinite(best):
+        return registrations
+    limit = config.polish_ratio * best + config.polish_margin_m
+    out = list(registrations)
+    for w, reg in enumerate(registrations):
+        if not reg.error_is_exact and reg.error_m <= limit:
+            out[w] = reg.with_exact_error(
+                models[w], curves, True, geometry.point, config.polish_iterations
+            )
+    return out
+
+
+# --- ICP baseline -----------------------------------------------------------------------
 
 
 def _register_icp(model, curves, geometry, config, start) -> Registration:
@@ -428,7 +865,7 @@ def _register_icp(model, curves, geometry, config, start) -> Registration:
         R, t = _superposition_poses(model, rows, hyp, phis)
         for Rs, ts in zip(R.reshape(-1, 3, 3), t.reshape(-1, 3), strict=True):
             trace = []
-            for _ in range(config.iterations):
+            for _ in range(config.icp_iterations):
                 X = points @ Rs.T + ts
                 _, nearest = model.tree.query(X)
                 y, n = model.vertices[nearest], model.normals[nearest]
@@ -467,6 +904,17 @@ def _register_icp(model, curves, geometry, config, start) -> Registration:
     )
 
 
+def registration_mode(mode: RegistrationMode | str) -> RegistrationMode:
+    """The mode named ``mode``, or :class:`~recognition.errors.InvalidCurveData`."""
+    try:
+        return RegistrationMode(mode)
+    except ValueError:
+        raise InvalidCurveData(
+            f"unknown registration mode {mode!r}; expected one of "
+            f"{', '.join(m.value for m in RegistrationMode)}"
+        ) from None
+
+
 def register(
     model: MeshModel,
     curves: DataCurves,
@@ -486,21 +934,20 @@ def register(
     mode : {"fast", "thesis", "icp-baseline"}
     config : RegistrationConfig
     geometry : LocalSurfaceGeometry, optional
-        The data's local geometry, if already computed (it does not depend on the model).
+        The data's local geometry, if already computed (it does not depend on the model;
+        default :func:`data_geometry`).
     exact : bool
-        Fast mode: compute the final error exactly (else from the distance field).
+        Fast mode: polish the pose and compute the error on exact closest points (else
+        the error is read off the distance field).
     """
     start = time.perf_counter()
-    try:
-        mode = RegistrationMode(mode)
-    except ValueError:
-        raise InvalidCurveData(
-            f"unknown registration mode {mode!r}; expected one of "
-            f"{', '.join(m.value for m in RegistrationMode)}"
-        ) from None
-    geometry = geometry or local_surface_geometry(curves)
+    mode = registration_mode(mode)
+    geometry = geometry or data_geometry(curves, config)
     if mode is RegistrationMode.FAST:
-        return _register_fast(model, curves, geometry, config, start, exact)
+        result = register_fast([model], curves, geometry, config)[0]
+        if exact:
+            result = result.with_exact_error(model, curves, refine=True, point=geometry.point)
+        return replace(result, time_s=time.perf_counter() - start)
     if mode is RegistrationMode.ICP:
         return _register_icp(model, curves, geometry, config, start)
     from recognition.surfaces.thesis_registration import register_thesis

@@ -160,3 +160,29 @@ def test_validation_repairs_duplicated_seam_vertices():
     assert not split.is_watertight
     fixed = validate_mesh(split, "split")
     assert fixed.is_watertight and len(fixed.vertices) == len(m.vertices)
+
+
+def test_field_stack_reads_each_field_as_the_field_itself():
+    from recognition.surfaces.distance import FieldStack
+
+    models = [MeshModel("blob", blob(subdivisions=4)), MeshModel("sphere", sphere(0.02, 4))]
+    stack = FieldStack.of([m.distance_field for m in models])
+    rng = np.random.default_rng(4)
+    for k, m in enumerate(models):
+        p = m.vertices[rng.integers(len(m.vertices), size=(6, 30))]
+        p = p + rng.normal(scale=1.5e-3, size=p.shape)
+        p[0, 0] = [1.0, 1.0, 1.0]  # off the grid: +band, no gradient
+        which = np.full(6, k)
+        field = m.distance_field
+        np.testing.assert_allclose(stack(p, which), field(p), atol=1e-9)
+        value, grad = stack.value_and_gradient(p, which)
+        v_ref, g_ref = field.value_and_gradient(p)
+        np.testing.assert_allclose(value, v_ref, atol=1e-9)
+        np.testing.assert_allclose(grad, g_ref, atol=1e-5)
+        assert value[0, 0] == field.band and np.all(grad[0, 0] == 0)
+        # screening: patterns placed by frames, nearest voxel
+        frames = np.repeat(np.eye(3)[None], 6, axis=0)
+        near = stack.nearest_in_frames(which, frames, np.zeros((6, 3)), p)
+        np.testing.assert_allclose(near[0], field.nearest(p), atol=1e-9)
+        paired = stack.nearest_in_frames(which, frames, np.zeros((6, 3)), p, paired=True)
+        np.testing.assert_allclose(paired, field.nearest(p), atol=1e-9)

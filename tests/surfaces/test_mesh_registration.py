@@ -133,3 +133,111 @@ def test_corrupt_or_stale_database_is_refused(tmp_path, database):
     manifest.write_text(manifest.read_text().replace('"format": 3', '"format": 1'))
     with pytest.raises(InvalidModel, match="rebuild"):
         ModelDatabase.load(directory)
+
+
+def test_noise_is_estimated_from_the_sampling_planes(models):
+    from recognition.surfaces.registration import data_noise_m
+
+    model = models["blob"]
+    for sigma in (0.01e-3, 0.03e-3):
+        estimates = [
+            data_noise_m(_curves(model, v, seed=v, noise=sigma).curves) for v in (100, 2500, 7000)
+        ]
+        np.testing.assert_allclose(np.mean(estimates), sigma, rtol=0.15)
+    assert data_noise_m(_curves(model, 100, seed=0).curves) < 1e-6
+
+
+def test_sparse_data_give_the_curvature_of_a_sphere():
+    # the thesis's real-data setting: 21 points 1.2 mm apart, noise 0.02 mm
+    from testing_meshes import sphere
+
+    from recognition.surfaces.registration import data_geometry
+
+    radius = 0.03
+    model = MeshModel("sphere", sphere(radius))
+    k = []
+    for vertex in range(0, len(model.vertices), len(model.vertices) // 20):
+        synthetic = mesh_data_curves(
+            model.mesh,
+            vertex,
+            normal=model.normals[vertex],
+            n_points=21,
+            spacing_m=1.2e-3,
+            noise_std_m=0.02e-3,
+            rng=np.random.default_rng(vertex),
+        )
+        g = data_geometry(synthetic.curves)
+        k += [g.k1, g.k2]
+    # 1/r = 33.3 1/m; the thesis's tolerance (4.7) is 30 1/m
+    assert abs(np.median(k) - 1 / radius) < 2.0
+    assert np.percentile(np.abs(np.array(k) - 1 / radius), 90) < 10.0
+
+
+def test_exact_refinement_never_makes_a_pose_worse(models):
+    from scipy.spatial.transform import Rotation
+
+    from recognition.surfaces.registration import refine_exact
+
+    model = models["blob"]
+    synthetic = _curves(model, 2500, seed=7, noise=0.02e-3)
+    points = synthetic.curves.points
+    T = synthetic.T_model_from_data
+    rng = np.random.default_rng(1)
+    for scale in (0.0, 0.2e-3, 1e-3):
+        dR = Rotation.from_rotvec(rng.normal(scale=scale * 10, size=3)).as_matrix()
+        R, t = dR @ T[:3, :3], T[:3, 3] + rng.normal(scale=scale, size=3)
+        before = np.mean(model.distance.closest(points @ R.T + t)[0])
+        R2, t2, after = refine_exact(model, points, R, t)
+        assert np.mean(model.distance.closest(points @ R2.T + t2)[0]) == pytest.approx(after)
+        # least squares may trade a little mean distance for a smaller mean square
+        assert after <= before * 1.01
+        if scale > 0:
+            assert after < 0.5 * before
+
+
+def test_recognising_against_some_models_registers_them_as_in_the_full_search(database, models):
+    synthetic = _curves(models["ellipsoid"], 1500, seed=4, noise=0.01e-3)
+    full = database.recognize(synthetic.curves)
+    part = database.recognize(synthetic.curves, models=["torus", "ellipsoid"])
+    assert set(part.registrations) == {"torus", "ellipsoid"}
+    assert part.name == full.name == "ellipsoid"
+    for name in ("torus", "ellipsoid"):
+        a, b = full.registrations[name], part.registrations[name]
+        np.testing.assert_allclose(a.location, b.location, atol=1e-9)
+
+
+def test_the_fallback_search_recovers_a_pose_that_a_sparse_first_pass_misses(models):
+    from dataclasses import replace
+
+    from recognition.surfaces.registration import (
+        FastSearchConfig,
+        RegistrationConfig,
+        acceptable_error_m,
+        data_noise_m,
+    )
+
+    model = models["blob"]
+    synthetic = _curves(model, 4000, seed=11, noise=0.01e-3)
+    # a first pass that hardly searches: few candidates, coarse phi, no refinement
+    poor = FastSearchConfig(
+        candidate_spacing_m=15e-3,
+        aligned_anisotropy=float("inf"),
+        scan_step_rad=np.deg2rad(90.0),
+        n_screened=1,
+        screen_iterations=0,
+        n_coarse=1,
+        coarse_iterations=0,
+        n_final=1,
+        final_iterations=0,
+    )
+    without = register(
+        model,
+        synthetic.curves,
+        config=RegistrationConfig(search=poor, fallback=None, polish_iterations=0),
+    )
+    limit = acceptable_error_m(data_noise_m(synthetic.curves))
+    assert without.error_m > limit
+    config = replace(RegistrationConfig(), search=poor, polish_iterations=0)
+    with_fallback = register(model, synthetic.curves, config=config)
+    assert with_fallback.error_m <= limit
+    np.testing.assert_allclose(with_fallback.location, synthetic.point_in_model, atol=0.2e-3)
