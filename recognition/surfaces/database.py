@@ -32,7 +32,7 @@ from recognition.surfaces.registration import (
 __all__ = ["DATABASE_FORMAT", "ModelDatabase", "Recognition"]
 
 #: Version of the on-disk format; a different version is rebuilt, never read.
-DATABASE_FORMAT = 3
+DATABASE_FORMAT = 4
 #: Thesis and ICP modes: models whose registration error is computed exactly (the best
 #: by their own error); the fast mode decides which models to polish itself.
 EXACT_TOP = 3
@@ -162,7 +162,7 @@ class ModelDatabase:
         for name, mesh in items:
             model = MeshModel(name, mesh, config)
             model.table  # noqa: B018 - build now, not at the first recognition
-            model.vertex_curvatures  # noqa: B018
+            model.candidate_curvatures  # noqa: B018
             model.distance_field  # noqa: B018
             models[name] = model
         return cls(models, registration)
@@ -178,7 +178,7 @@ class ModelDatabase:
         directory = Path(directory)
         manifest = {"format": DATABASE_FORMAT, "models": {}}
         for name, model in self.models.items():
-            table, df, dense = model.table, model.distance_field, model.vertex_curvatures
+            table, df, dense = model.table, model.distance_field, model.candidate_curvatures
             file = f"{_safe(name)}.npz"
             arrays = {
                 "vertices": model.vertices,
@@ -188,6 +188,7 @@ class ModelDatabase:
                 "table_k1": table.k1,
                 "table_k2": table.k2,
                 "table_d1": table.d1,
+                "vertex_index": dense.vertex,
                 "vertex_k1": dense.k1.astype(np.float32),
                 "vertex_k2": dense.k2.astype(np.float32),
                 "vertex_d1": dense.d1.astype(np.float32),
@@ -252,13 +253,13 @@ class ModelDatabase:
                 float(a["field_band"]),
             )
             dense = CurvatureTable(
-                np.arange(len(a["vertices"])),
+                a["vertex_index"],
                 a["vertex_k1"].astype(float),
                 a["vertex_k2"].astype(float),
                 a["vertex_d1"].astype(float),
             )
             model = MeshModel(
-                name, mesh, model_config, table, df, validate=False, vertex_curvatures=dense
+                name, mesh, model_config, table, df, validate=False, candidate_curvatures=dense
             )
             if model.hash != entry["mesh_hash"]:
                 raise InvalidModel(f"{name}: mesh content does not match its hash; rebuild it")

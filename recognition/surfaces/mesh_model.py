@@ -38,10 +38,11 @@ __all__ = [
 MAX_DIAGONAL_M = 2.0
 #: Smallest plausible bounding-box diagonal in metres.
 MIN_DIAGONAL_M = 5.0e-3
-#: Neighbours of the single paraboloid fit of the per-vertex curvature map.
-DENSE_FIT_SIZE = 50
-#: Cell size of the candidate pool drawn from the per-vertex curvature map.
-POOL_SPACING_M = 1.0e-3
+#: Neighbours of the single paraboloid fit at each candidate vertex of the fast mode
+#: (about 2.5 mm around it on the catalog's meshes: the scale of the data's curve fits).
+CANDIDATE_FIT_SIZE = 100
+#: The fast mode's candidate vertices: one per cubic cell of this side, metres.
+CANDIDATE_SPACING_M = 1.0e-3
 
 
 @dataclass(frozen=True)
@@ -390,6 +391,13 @@ class MeshModel:
     config : MeshModelConfig
     table : CurvatureTable, optional
         A table built earlier for the same mesh and config (e.g. loaded from a cache).
+    distance_field : DistanceField, optional
+    validate : bool
+        Validate (and repair) the mesh; False for a mesh loaded from a database.
+    candidate_curvatures : CurvatureTable, optional
+        The fast mode's candidate map built earlier (see :attr:`candidate_curvatures`).
+    normals : (n, 3) float, optional
+        Vertex normals (4.13) computed earlier.
     """
 
     def __init__(
@@ -400,7 +408,7 @@ class MeshModel:
         table: CurvatureTable | None = None,
         distance_field: DistanceField | None = None,
         validate: bool = True,
-        vertex_curvatures: CurvatureTable | None = None,
+        candidate_curvatures: CurvatureTable | None = None,
         normals: np.ndarray | None = None,
     ):
         self.name = name
@@ -413,12 +421,11 @@ class MeshModel:
         )
         self.hash = mesh_hash(self.vertices, self.faces)
         self._table = table
-        self._dense = vertex_curvatures
+        self._dense = candidate_curvatures
         self._field = distance_field
         self._distance = None
         self._tree = None
         self._cell_keys: dict[float, np.ndarray] = {}
-        self._pools: dict[float, CurvatureTable] = {}
         self.timings: dict[str, float] = {}
 
     @property
@@ -446,25 +453,27 @@ class MeshModel:
         return self._table
 
     @property
-    def vertex_curvatures(self) -> CurvatureTable:
-        """Principal curvatures at every vertex (one paraboloid fit each; built on first use).
+    def candidate_curvatures(self) -> CurvatureTable:
+        """Principal curvatures at the fast mode's candidate vertices (built on first use).
 
-        Not part of the thesis's method: the fast registration draws its candidates from
-        it (the thesis's table holds only the adaptively sampled vertices).
+        One vertex per cubic cell of side ``CANDIDATE_SPACING_M`` (the first in vertex
+        order), one paraboloid fit (4.14) over its ``CANDIDATE_FIT_SIZE`` nearest vertices.
+        Not part of the thesis's method, whose table holds only the adaptively sampled
+        vertices: the fast mode draws its candidates from this denser map.
         """
         if self._dense is None:
             import time
 
             start = time.perf_counter()
-            every = np.arange(len(self.vertices))
+            _, vertices = np.unique(self.cell_keys(CANDIDATE_SPACING_M), return_index=True)
             parts = [
                 paraboloid_curvatures(
-                    self.vertices, self.normals, chunk, (DENSE_FIT_SIZE,), self.tree
+                    self.vertices, self.normals, chunk, (CANDIDATE_FIT_SIZE,), self.tree
                 )
-                for chunk in np.array_split(every, max(1, len(every) // 20000))
+                for chunk in np.array_split(vertices, max(1, len(vertices) // 10000))
             ]
             k1, k2, d1 = (np.concatenate(x) for x in zip(*parts, strict=True))
-            self._dense = CurvatureTable(every, k1, k2, d1)
+            self._dense = CurvatureTable(vertices, k1, k2, d1)
             self.timings["vertex_curvatures_s"] = time.perf_counter() - start
         return self._dense
 
@@ -492,17 +501,6 @@ class MeshModel:
         if self._distance is None:
             self._distance = MeshDistance(self.vertices, self.faces, self.tree)
         return self._distance
-
-    def candidate_pool(self, spacing: float = POOL_SPACING_M) -> CurvatureTable:
-        """The per-vertex curvature map thinned to one vertex per cell of ``spacing`` (cached)."""
-        pool = self._pools.get(spacing)
-        if pool is None:
-            keys = self.cell_keys(spacing)
-            _, first = np.unique(keys, return_index=True)
-            dense = self.vertex_curvatures
-            pool = CurvatureTable(first, dense.k1[first], dense.k2[first], dense.d1[first])
-            self._pools[spacing] = pool
-        return pool
 
     def cell_keys(self, spacing: float) -> np.ndarray:
         """(n,) int64 key of the cubic cell of side ``spacing`` holding each vertex (cached)."""

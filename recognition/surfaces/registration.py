@@ -50,6 +50,7 @@ __all__ = [
     "RegistrationMode",
     "RegistrationStatus",
     "acceptable_error_m",
+    "data_fit_residual_m",
     "data_geometry",
     "data_noise_m",
     "refine_exact",
@@ -169,6 +170,11 @@ class RegistrationConfig:
         A fit is good enough when its mean error is at most ``accept_noise_factor``
         times the mean distance that the data's noise alone gives (sqrt(2/pi) sigma)
         plus ``accept_floor_m``.
+    fit_noise_factor, fit_floor_m
+        The curve fits at p are trusted when they explain each curve near p, and pass
+        by p, to within ``fit_noise_factor`` times the data's noise plus ``fit_floor_m``
+        (:func:`data_fit_residual_m`); otherwise (p on a crease) the fast mode does not
+        restrict its candidates by curvature.
     prune_ratio : float or None
         Fast mode: a model whose best coarse RMS residual exceeds this multiple of the
         best model's stops before the final stage; None: never.
@@ -197,6 +203,8 @@ class RegistrationConfig:
     fallback: FastSearchConfig | None = THOROUGH_SEARCH
     accept_noise_factor: float = 1.5
     accept_floor_m: float = 5.0e-6
+    fit_noise_factor: float = 5.0
+    fit_floor_m: float = 5.0e-6
     prune_ratio: float | None = 4.0
     polish_ratio: float = 1.5
     polish_margin_m: float = 0.01e-3
@@ -341,6 +349,38 @@ def data_noise_m(curves: DataCurves) -> float:
         total += float(residual @ residual)
         dof += max(len(c) - 3, 1)
     return float(np.sqrt(total / dof))
+
+
+def data_fit_residual_m(curves: DataCurves, config: RegistrationConfig = RegistrationConfig()):
+    """How far the data's local fits at p miss the data, metres.
+
+    Each curve is fitted near p as in :func:`data_geometry` (a plane, then a polynomial
+    in it along the local chord); the result is the largest, over the curves, of the fit's
+    RMS residual (per degree of freedom) and of its distance from p.
+    """
+    p = curves.intersection
+    half_length = max(config.fit_half_length_m, config.fit_spacings * _median_spacing(curves))
+    degree = config.fit_degree
+    worst = 0.0
+    for curve in curves.curves:
+        centred = curve - curve.mean(axis=0)
+        normal = np.linalg.svd(centred, full_matrices=False)[2][-1]
+        distance = np.linalg.norm(curve - p, axis=1)
+        near = np.flatnonzero(distance <= half_length)
+        if near.size < degree + 2:
+            near = np.sort(np.argsort(distance)[: degree + 2])
+        local = curve[near[0] : near[-1] + 1]
+        chord = local[-1] - local[0]
+        chord -= normal * (chord @ normal)
+        ex = chord / np.linalg.norm(chord)
+        ey = np.cross(normal, ex)
+        x, y = (local - p) @ ex, (local - p) @ ey
+        scale = max(np.abs(x).max(), 1e-12)
+        coef = np.polynomial.polynomial.polyfit(x / scale, y, degree)
+        residual = y - np.polynomial.polynomial.polyval(x / scale, coef)
+        rms = np.sqrt(residual @ residual / max(len(residual) - degree - 1, 1))
+        worst = max(worst, float(rms), float(abs(coef[0])))
+    return worst
 
 
 def acceptable_error_m(noise_m: float, config: RegistrationConfig = RegistrationConfig()) -> float:
@@ -527,25 +567,25 @@ def refine_exact(
 
 
 def _dense_candidates(model, geometry, delta, spacing):
-    """Vertices whose curvature is within delta of the data's, one per ``spacing`` cell.
+    """Rows of the candidate map within delta of the data's (k1, k2), one per cell.
 
-    From the per-vertex curvature map (thinned to a 1 mm pool); in each cubic cell of side
-    ``spacing`` the vertex nearest in (k1, k2) is kept, so candidates cover every matching
+    Rows of :attr:`MeshModel.candidate_curvatures` whose curvature is within ``delta``
+    (1/m; ``inf``: every row) of the data's (4.7); in each cubic cell of side
+    ``spacing`` the row nearest in (k1, k2) is kept, so candidates cover every matching
     region about evenly.
     """
-    pool = model.candidate_pool()
-    rows = (
-        pool.query(geometry.k1, geometry.k2, delta) if np.isfinite(delta) else np.arange(len(pool))
-    )
+    pool = model.candidate_curvatures
+    rows = pool.query(geometry.k1, geometry.k2, delta) if np.isfinite(delta) else None
+    if rows is None:
+        rows = np.arange(len(pool))
     if rows.size == 0:
         return rows
-    vertices = pool.vertex[rows]
     dist = np.hypot(pool.k1[rows] - geometry.k1, pool.k2[rows] - geometry.k2)
-    cell = model.cell_keys(spacing)[vertices]
+    cell = model.cell_keys(spacing)[pool.vertex[rows]]
     order = np.lexsort((dist, cell))
     first = np.ones(order.size, bool)
     first[1:] = cell[order[1:]] != cell[order[:-1]]
-    return vertices[order[first]]
+    return rows[order[first]]
 
 
 def _arm_indices(curves: DataCurves, point: np.ndarray, fractions) -> np.ndarray:
@@ -618,20 +658,20 @@ def _screen(models, stack, which_field, curves, geometry, config, search, log):
         data_anisotropic = hyp.k1 - hyp.k2 >= search.aligned_anisotropy
         for w, model in enumerate(models):
             start = time.perf_counter()
-            vertices = _dense_candidates(model, hyp, tolerance, search.candidate_spacing_m)
-            candidates[w].append(vertices)
-            if vertices.size == 0:
+            pool = model.candidate_curvatures
+            rows = _dense_candidates(model, hyp, tolerance, search.candidate_spacing_m)
+            candidates[w].append(pool.vertex[rows])
+            if rows.size == 0:
                 log[w] += time.perf_counter() - start
                 continue
-            dense = model.vertex_curvatures
             aligned = data_anisotropic & (
-                dense.k1[vertices] - dense.k2[vertices] >= search.aligned_anisotropy
+                pool.k1[rows] - pool.k2[rows] >= search.aligned_anisotropy
             )
             for mask, phis in ((aligned, aligned_phis), (~aligned, scan_phis)):
                 if not mask.any():
                     continue
-                v = vertices[mask]
-                frames = _frames(model.normals[v], dense.d1[v])
+                v = pool.vertex[rows[mask]]
+                frames = _frames(model.normals[v], pool.d1[rows[mask]])
                 turns = _rot_z(phis)
                 patterns = np.einsum("fij,pj->fpi", turns, local)  # (F, P, 3)
                 pre_patterns = np.einsum("fij,pj->fpi", turns, pre_local)
@@ -799,11 +839,17 @@ def register_fast(
     if stack is None:
         stack = FieldStack.of([m.distance_field for m in models])
     which_field = np.arange(len(models)) if which_field is None else np.asarray(which_field)
-    first = _search(models, stack, curves, geometry, config, config.search, which_field)
+    noise = data_noise_m(curves) if noise_m is None else noise_m
+    trusted = data_fit_residual_m(curves, config) <= (
+        config.fit_noise_factor * noise + config.fit_floor_m
+    )
+    search = config.search
+    if not trusted:
+        search = replace(search, tolerance_scale=np.inf, aligned_anisotropy=np.inf)
+    first = _search(models, stack, curves, geometry, config, search, which_field)
     registrations = _polish(models, curves, geometry, first, config)
     if config.fallback is None:
         return registrations
-    noise = data_noise_m(curves) if noise_m is None else noise_m
     if min(r.error_m for r in registrations) <= acceptable_error_m(noise, config):
         return registrations
     # models rejected at table lookup stay rejected: the fallback searches the others

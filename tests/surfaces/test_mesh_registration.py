@@ -130,7 +130,11 @@ def test_corrupt_or_stale_database_is_refused(tmp_path, database):
     with pytest.raises(InvalidModel, match="no readable model database"):
         ModelDatabase.load(tmp_path / "missing")
     manifest = directory / "manifest.json"
-    manifest.write_text(manifest.read_text().replace('"format": 3', '"format": 1'))
+    from recognition.surfaces.database import DATABASE_FORMAT
+
+    text = manifest.read_text()
+    assert f'"format": {DATABASE_FORMAT}' in text
+    manifest.write_text(text.replace(f'"format": {DATABASE_FORMAT}', '"format": 1'))
     with pytest.raises(InvalidModel, match="rebuild"):
         ModelDatabase.load(directory)
 
@@ -241,3 +245,22 @@ def test_the_fallback_search_recovers_a_pose_that_a_sparse_first_pass_misses(mod
     with_fallback = register(model, synthetic.curves, config=config)
     assert with_fallback.error_m <= limit
     np.testing.assert_allclose(with_fallback.location, synthetic.point_in_model, atol=0.2e-3)
+
+
+def test_curve_fits_are_distrusted_on_a_crease(models):
+    from recognition.surfaces.registration import data_fit_residual_m, data_noise_m
+
+    synthetic = _curves(models["blob"], 2500, seed=3, noise=0.01e-3)
+    assert data_fit_residual_m(synthetic.curves) < 3 * data_noise_m(synthetic.curves)
+    # three sections through the apex of a cone: every curve has a kink at p
+    rng = np.random.default_rng(0)
+    u = np.linspace(-12e-3, 12e-3, 81)
+    curves = DataCurves(
+        tuple(
+            np.stack([np.cos(a) * u, np.sin(a) * u, -0.3 * np.abs(u)], 1)
+            + rng.normal(scale=0.01e-3, size=(81, 3))
+            for a in (0.0, np.pi / 3, 2 * np.pi / 3)
+        ),
+        approach=np.array([0, 0, -1.0]),
+    )
+    assert data_fit_residual_m(curves) > 10 * data_noise_m(curves)
