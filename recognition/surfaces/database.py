@@ -60,7 +60,8 @@ class Recognition:
         Second-best error minus best error, metres (inf if only one model fits).
     registrations : dict of str to Registration
     timings_s : dict of str to float
-        Registration time per model.
+        Registration time per model (fast mode: each model's share of the batched
+        search, in proportion to the point evaluations made for it).
     time_s : float
         Total time, local geometry included.
     geometry : LocalSurfaceGeometry
@@ -105,8 +106,9 @@ class ModelDatabase:
     mode : {"fast", "thesis", "icp-baseline"}
         Default registration mode of :meth:`recognize`.
     threads : int
-        Models registered concurrently by :meth:`recognize` (numpy releases the GIL in
-        the heavy array work); results do not depend on it.
+        Thesis and ICP modes: models registered concurrently by :meth:`recognize` (numpy
+        releases the GIL in the heavy array work); results do not depend on it. The fast
+        mode searches all models in one batch.
     """
 
     def __init__(
@@ -129,6 +131,16 @@ class ModelDatabase:
     @property
     def names(self) -> list[str]:
         return list(self.models)
+
+    def prepare(self) -> ModelDatabase:
+        """Build every search structure now (KD-trees, exact distances, the field stack),
+        so that no recognition pays for a lazy build; returns the database."""
+        for model in self.models.values():
+            model.tree  # noqa: B018
+            model.distance  # noqa: B018
+            model.candidate_curvatures  # noqa: B018
+        self.field_stack  # noqa: B018
+        return self
 
     @property
     def field_stack(self) -> FieldStack:
@@ -165,7 +177,7 @@ class ModelDatabase:
             model.candidate_curvatures  # noqa: B018
             model.distance_field  # noqa: B018
             models[name] = model
-        return cls(models, registration)
+        return cls(models, registration).prepare()
 
     # --- persistence ------------------------------------------------------------------
 
@@ -265,7 +277,7 @@ class ModelDatabase:
                 raise InvalidModel(f"{name}: mesh content does not match its hash; rebuild it")
             model.timings.update(entry.get("timings_s", {}))
             models[name] = model
-        database = cls(models, registration)
+        database = cls(models, registration).prepare()
         database.directory = directory
         return database
 
