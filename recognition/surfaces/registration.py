@@ -166,10 +166,10 @@ class RegistrationConfig:
         over their whole surface, since curvature estimates fail on sharp creases), run
         when the best error of the first pass exceeds :func:`acceptable_error_m`; None:
         never.
-    accept_noise_factor, accept_floor_m
-        A fit is good enough when its mean error is at most ``accept_noise_factor``
-        times the mean distance that the data's noise alone gives (sqrt(2/pi) sigma)
-        plus ``accept_floor_m``.
+    accept_sigmas, accept_floor_m
+        A fit is good enough when its mean error is within ``accept_sigmas`` standard
+        deviations of the mean distance that the data's noise alone gives, plus
+        ``accept_floor_m`` (:func:`acceptable_error_m`).
     fit_noise_factor, fit_floor_m
         The curve fits at p are trusted when they explain each curve near p, and pass
         by p, to within ``fit_noise_factor`` times the data's noise plus ``fit_floor_m``
@@ -201,7 +201,7 @@ class RegistrationConfig:
     fit_degree: int = 3
     search: FastSearchConfig = FastSearchConfig()
     fallback: FastSearchConfig | None = THOROUGH_SEARCH
-    accept_noise_factor: float = 1.5
+    accept_sigmas: float = 4.0
     accept_floor_m: float = 5.0e-6
     fit_noise_factor: float = 5.0
     fit_floor_m: float = 5.0e-6
@@ -383,13 +383,20 @@ def data_fit_residual_m(curves: DataCurves, config: RegistrationConfig = Registr
     return worst
 
 
-def acceptable_error_m(noise_m: float, config: RegistrationConfig = RegistrationConfig()) -> float:
-    """Largest registration error that the data's noise explains (see RegistrationConfig).
+def acceptable_error_m(
+    noise_m: float, n_points: int, config: RegistrationConfig = RegistrationConfig()
+) -> float:
+    """Largest mean registration error (4.8) that the data's noise explains, metres.
 
     For points displaced by Gaussian noise of standard deviation sigma, the mean distance
-    to the surface they were sampled on is sqrt(2/pi) sigma.
+    to the surface they were sampled on is sqrt(2/pi) sigma, with a relative standard
+    deviation of sqrt(pi/2 - 1 / 2) / sqrt(n) over n points once the error of the noise
+    estimate itself (:func:`data_noise_m`) is included; the limit lies
+    ``accept_sigmas`` such deviations above, plus ``accept_floor_m``.
     """
-    return config.accept_noise_factor * np.sqrt(2 / np.pi) * noise_m + config.accept_floor_m
+    spread = np.sqrt(np.pi / 2 - 0.5) / np.sqrt(max(n_points, 1))
+    mean = np.sqrt(2 / np.pi) * noise_m
+    return float(mean * (1 + config.accept_sigmas * spread) + config.accept_floor_m)
 
 
 # --- shared helpers -------------------------------------------------------------------
@@ -850,7 +857,9 @@ def register_fast(
     registrations = _polish(models, curves, geometry, first, config)
     if config.fallback is None:
         return registrations
-    if min(r.error_m for r in registrations) <= acceptable_error_m(noise, config):
+    if min(r.error_m for r in registrations) <= acceptable_error_m(
+        noise, len(curves.points), config
+    ):
         return registrations
     # models rejected at table lookup stay rejected: the fallback searches the others
     kept = [

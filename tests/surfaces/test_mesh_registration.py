@@ -239,7 +239,7 @@ def test_the_fallback_search_recovers_a_pose_that_a_sparse_first_pass_misses(mod
         synthetic.curves,
         config=RegistrationConfig(search=poor, fallback=None, polish_iterations=0),
     )
-    limit = acceptable_error_m(data_noise_m(synthetic.curves))
+    limit = acceptable_error_m(data_noise_m(synthetic.curves), len(synthetic.curves.points))
     assert without.error_m > limit
     config = replace(RegistrationConfig(), search=poor, polish_iterations=0)
     with_fallback = register(model, synthetic.curves, config=config)
@@ -264,3 +264,18 @@ def test_curve_fits_are_distrusted_on_a_crease(models):
         approach=np.array([0, 0, -1.0]),
     )
     assert data_fit_residual_m(curves) > 10 * data_noise_m(curves)
+
+
+def test_the_true_pose_is_acceptable_and_a_slightly_wrong_one_is_not(models):
+    from recognition.surfaces.registration import acceptable_error_m, data_noise_m
+
+    model = models["blob"]
+    for vertex in (100, 2500, 4000, 7000):
+        synthetic = _curves(model, vertex, seed=vertex, noise=0.02e-3)
+        points = synthetic.curves.points
+        limit = acceptable_error_m(data_noise_m(synthetic.curves), len(points))
+        T = synthetic.T_model_from_data
+        moved = points @ T[:3, :3].T + T[:3, 3]
+        assert np.mean(model.distance.closest(moved)[0]) < limit
+        shifted = moved + 0.05e-3 * model.normals[vertex]
+        assert np.mean(model.distance.closest(shifted)[0]) > limit
