@@ -37,10 +37,16 @@ from enum import StrEnum
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from recognition.errors import InvalidCurveData
+from recognition.errors import DegenerateGeometry, InvalidCurveData
 from recognition.surfaces.data_curves import DataCurves
 from recognition.surfaces.distance import FieldStack
-from recognition.surfaces.local_geometry import LocalSurfaceGeometry, local_surface_geometry
+from recognition.surfaces.local_geometry import (
+    LocalSurfaceGeometry,
+    curve_frame_at,
+    normal_curvature,
+    principal_curvatures_from_normal_curvatures,
+    surface_normal,
+)
 from recognition.surfaces.mesh_model import MeshModel
 
 __all__ = [
@@ -50,6 +56,7 @@ __all__ = [
     "RegistrationMode",
     "RegistrationStatus",
     "acceptable_error_m",
+    "common_point",
     "data_fit_residual_m",
     "data_geometry",
     "data_noise_m",
@@ -320,18 +327,77 @@ def _median_spacing(curves: DataCurves) -> float:
     return float(np.median(np.concatenate(steps)))
 
 
+def _distances_to_polyline(points: np.ndarray, polyline: np.ndarray) -> np.ndarray:
+    """(n,) distance from each point (n, 3) to a polyline (m, 3)."""
+    a, ab = polyline[:-1], np.diff(polyline, axis=0)
+    rel = points[:, None, :] - a[None]
+    s = np.clip(np.einsum("nmi,mi->nm", rel, ab) / np.einsum("mi,mi->m", ab, ab), 0.0, 1.0)
+    return np.min(np.linalg.norm(rel - s[..., None] * ab[None], axis=-1), axis=1)
+
+
+def common_point(curves: DataCurves) -> np.ndarray:
+    """The point where all the data curves meet (p of thesis Fig. 4.1), (3,) metres.
+
+    Of the points of every curve, the one whose largest distance to the other curves is
+    least; then the mean of the points of the curves nearest it. Unlike the pairwise
+    closest points (:attr:`DataCurves.intersection`), a place where only two curves come
+    close (sampling planes a few degrees apart over a strongly curved surface) is not
+    taken for p.
+    """
+    best = None
+    for i, c in enumerate(curves.curves):
+        others = [_distances_to_polyline(c, o) for j, o in enumerate(curves.curves) if j != i]
+        worst = np.max(others, axis=0)
+        k = int(np.argmin(worst))
+        if best is None or worst[k] < best[0]:
+            best = (worst[k], c[k])
+    p = best[1]
+    for _ in range(2):
+        nearest = []
+        for c in curves.curves:
+            a, ab = c[:-1], np.diff(c, axis=0)
+            s = np.clip(np.einsum("mi,mi->m", p - a, ab) / np.einsum("mi,mi->m", ab, ab), 0, 1)
+            q = a + s[:, None] * ab
+            nearest.append(q[np.argmin(np.linalg.norm(q - p, axis=1))])
+        p = np.mean(nearest, axis=0)
+    return p
+
+
 def data_geometry(
     curves: DataCurves, config: RegistrationConfig = RegistrationConfig()
 ) -> LocalSurfaceGeometry:
     """Normal and principal curvatures at p (thesis Eqs. (4.1)-(4.6)) at the models' scale.
 
-    Each curve is fitted over the arc within max(``fit_half_length_m``, ``fit_spacings``
-    x the point spacing) of p by a polynomial of degree ``fit_degree``: about the
-    neighbourhood of the models' paraboloid fits (4.14), and at least three points
-    either side of p when the points are sparse (the thesis's real data: 1.2 mm apart).
+    As :func:`~recognition.surfaces.local_geometry.local_surface_geometry`, at the point
+    where all curves meet (:func:`common_point`), each curve fitted over the arc within
+    max(``fit_half_length_m``, ``fit_spacings`` x the point spacing) of p by a
+    polynomial of degree ``fit_degree``: about the neighbourhood of the models'
+    paraboloid fits (4.14), and at least three points either side of p when the points
+    are sparse (the thesis's real data: 1.2 mm apart).
     """
     half_length = max(config.fit_half_length_m, config.fit_spacings * _median_spacing(curves))
-    return local_surface_geometry(curves, half_length_m=half_length, degree=config.fit_degree)
+    p = common_point(curves)
+    frames = tuple(
+        curve_frame_at(c, p, half_length_m=half_length, degree=config.fit_degree)
+        for c in curves.curves
+    )
+    tangents = np.array([f.tangent for f in frames])
+    normal = surface_normal(tangents)
+    oriented = curves.approach is not None
+    if oriented:
+        normal = -normal if normal @ curves.approach > 0 else normal
+    kn = np.array([normal_curvature(f, normal) for f in frames])
+    if not oriented and kn.mean() < 0:
+        normal, kn = -normal, -kn
+    e1 = tangents[0] - normal * (tangents[0] @ normal)
+    e1 /= np.linalg.norm(e1)
+    e2 = np.cross(normal, e1)
+    angles = np.arctan2(tangents @ e2, tangents @ e1)
+    if np.min(np.abs(np.sin(angles[:, None] - angles[None, :])) + np.eye(len(angles))) < 1e-3:
+        raise DegenerateGeometry("two data curves have the same tangent direction at p")
+    k1, k2, angle1, _ = principal_curvatures_from_normal_curvatures(kn, angles)
+    d1 = np.cos(angle1) * e1 + np.sin(angle1) * e2
+    return LocalSurfaceGeometry(p, normal, k1, k2, d1, np.cross(normal, d1), frames, kn, oriented)
 
 
 def data_noise_m(curves: DataCurves) -> float:
@@ -351,14 +417,16 @@ def data_noise_m(curves: DataCurves) -> float:
     return float(np.sqrt(total / dof))
 
 
-def data_fit_residual_m(curves: DataCurves, config: RegistrationConfig = RegistrationConfig()):
-    """How far the data's local fits at p miss the data, metres.
+def data_fit_residual_m(
+    curves: DataCurves, config: RegistrationConfig = RegistrationConfig(), point=None
+):
+    """How far the data's local fits at p (default :func:`common_point`) miss the data, m.
 
     Each curve is fitted near p as in :func:`data_geometry` (a plane, then a polynomial
     in it along the local chord); the result is the largest, over the curves, of the fit's
     RMS residual (per degree of freedom) and of its distance from p.
     """
-    p = curves.intersection
+    p = common_point(curves) if point is None else np.asarray(point, float)
     half_length = max(config.fit_half_length_m, config.fit_spacings * _median_spacing(curves))
     degree = config.fit_degree
     worst = 0.0
@@ -847,7 +915,7 @@ def register_fast(
         stack = FieldStack.of([m.distance_field for m in models])
     which_field = np.arange(len(models)) if which_field is None else np.asarray(which_field)
     noise = data_noise_m(curves) if noise_m is None else noise_m
-    trusted = data_fit_residual_m(curves, config) <= (
+    trusted = data_fit_residual_m(curves, config, geometry.point) <= (
         config.fit_noise_factor * noise + config.fit_floor_m
     )
     search = config.search

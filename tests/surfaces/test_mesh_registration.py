@@ -1,5 +1,7 @@
 """Registration of data curves on mesh models and recognition over a small database."""
 
+import itertools
+
 import numpy as np
 import pytest
 from testing_meshes import blob, ellipsoid, torus
@@ -279,3 +281,19 @@ def test_the_true_pose_is_acceptable_and_a_slightly_wrong_one_is_not(models):
         assert np.mean(model.distance.closest(moved)[0]) < limit
         shifted = moved + 0.05e-3 * model.normals[vertex]
         assert np.mean(model.distance.closest(shifted)[0]) > limit
+
+
+def test_the_common_point_is_where_all_three_curves_meet():
+    from recognition.surfaces.registration import common_point
+
+    u = np.linspace(-10e-3, 10e-3, 81)
+    first = np.stack([u, 0 * u, 0 * u], 1)
+    second = np.stack([np.cos(1.0) * u, np.sin(1.0) * u, 0 * u], 1)
+    # the third passes 2 um above the origin, then turns back across both other curves
+    direction = np.array([np.cos(2.0), np.sin(2.0), 0.0])
+    corners = [-10e-3 * direction, np.array([0, 0, 2e-6]), 3e-3 * direction, [6e-3, -3e-3, 0]]
+    a = np.linspace(0, 1, 30, endpoint=False)[:, None]
+    third = np.concatenate([p + a * (np.asarray(q) - p) for p, q in itertools.pairwise(corners)])
+    curves = DataCurves((first, second, third))
+    assert np.linalg.norm(curves.intersection) > 0.3e-3  # pairwise closest points mislead
+    np.testing.assert_allclose(common_point(curves), 0.0, atol=5e-6)
