@@ -4,19 +4,23 @@ Three modes behind :func:`register` (one model) and
 :meth:`recognition.surfaces.database.ModelDatabase.recognize` (all models):
 
 ``fast`` (default)
-    Table lookup (4.7) in a per-vertex curvature map thinned to one candidate per cell;
-    at each candidate the data are superposed (p on the vertex, N on its normal, Section
-    4.1.2.2) at rotations phi about the normal: a window around the alignment of the
-    principal directions where both data and model are clearly anisotropic, a full scan
-    elsewhere. Every (candidate, phi) pose of every model is screened in one vectorised
-    batch on the models' narrow-band signed distance fields with a few points per arm of
-    the data; the best poses of each model slide into their basins by batched
-    Gauss-Newton over all six degrees of freedom on ever more points, near-duplicates
-    dropped between stages. A model whose coarse fit is far worse than the best model's
-    stops there. The reported error is the mean point-to-surface distance (4.8), exact
-    (closest points on the triangles) for the models that can win. When even the best
-    model fits worse than the data's own noise explains, the search is repeated more
-    densely (:attr:`RegistrationConfig.fallback`).
+    The data's normal and curvatures are estimated at the point where all three curves
+    meet, at the scale of the models' fits (:func:`data_geometry`). Table lookup (4.7) in
+    a curvature map of one vertex per 1 mm cell, thinned to one candidate per 2.5 mm
+    cell; where the curve fits at p do not explain the data (p on a crease), candidates
+    come from the whole surface. At each candidate the data are superposed (p on the
+    vertex, N on its normal, Section 4.1.2.2) at rotations phi about the normal: a window
+    around the alignment of the principal directions where both data and model are
+    clearly anisotropic, a full scan elsewhere. Every (candidate, phi) pose of every model
+    is screened in one vectorised batch on the models' narrow-band signed distance fields
+    with a few points per arm of the data; the best poses of each model slide into their
+    basins by batched Gauss-Newton over all six degrees of freedom on ever more points,
+    near-duplicates dropped between stages. A model whose coarse fit is far worse than
+    the best model's stops there. The reported error is the mean point-to-surface
+    distance (4.8), exact (closest points on the triangles, pose polished) for the models
+    that can win. When even the best model fits worse than the data's own noise
+    explains, the models not rejected at table lookup are searched again over their whole
+    surface (:attr:`RegistrationConfig.fallback`).
 ``thesis``
     The thesis's method: superposition by intersecting the three sampling planes with
     the mesh and resampling at the data's spacing (4.15), phi in 10-degree steps, then
