@@ -289,3 +289,42 @@ def test_sensing_experiment_measures_points_and_wall_times(tmp_path):
     assert all(t > 0 for t in figures["session_total_s"])
     assert "| bird | 63 |" in (tmp_path / "sim_sensing.md").read_text()
     assert json.loads((tmp_path / "sensing.json").read_text())["sensing"]["n_points"] == 63
+
+
+def _write_user_meshes(directory: Path) -> None:
+    """Two meshes in millimetres, in two of the accepted formats."""
+    directory.mkdir()
+    blob(subdivisions=4).apply_scale(1e3).export(directory / "blob.stl")
+    ellipsoid(subdivisions=4).apply_scale(1e3).export(directory / "egg.ply")
+
+
+def test_user_meshes_in_millimetres_are_benchmarked(tmp_path, monkeypatch):
+    script = _script()
+    monkeypatch.setattr(script, "ROOT", tmp_path)  # database cache and records go here
+    _write_user_meshes(tmp_path / "meshes")
+    argv = ["--mesh-dir", str(tmp_path / "meshes"), "--units", "mm", "--per-model", "2"]
+    argv += ["--n-points", "21", "--spacing-mm", "1.2", "--method", "fast", "--workers", "1"]
+    argv += ["--out-dir", str(tmp_path / "out"), "--json", str(tmp_path / "summary.json")]
+    assert script.main(argv) == 0
+    summary = json.loads((tmp_path / "summary.json").read_text())["fast"]
+    assert summary["instances"] == 4
+    assert summary["success_rate"] == 1.0
+    records = [json.loads(line) for f in (tmp_path / "runs").rglob("*.jsonl") for line in open(f)]
+    # the egg is a symmetric ellipsoid: its curves fit equally well at mirrored places
+    assert all(r["localization_error_mm"] < 1.0 for r in records if r["model"] == "blob")
+    report = (tmp_path / "out" / "meshes.md").read_text()
+    assert "| blob |" in report and "| egg |" in report
+    # the database is cached: a second run loads it instead of building it again
+    cached = list((tmp_path / "runs" / "mesh_databases").iterdir())
+    assert len(cached) == 1
+    assert script.main(argv) == 0
+    assert list((tmp_path / "runs" / "mesh_databases").iterdir()) == cached
+
+
+def test_millimetre_meshes_read_as_metres_are_named(tmp_path, monkeypatch, capsys):
+    script = _script()
+    monkeypatch.setattr(script, "ROOT", tmp_path)
+    _write_user_meshes(tmp_path / "meshes")
+    assert script.main(["--mesh-dir", str(tmp_path / "meshes"), "--method", "fast"]) == 2
+    last = capsys.readouterr().err.splitlines()[-1]  # after the progress bar
+    assert last.startswith("error: blob") and "millimetres read as metres" in last
