@@ -225,14 +225,18 @@ def local_surface_geometry(
     *,
     half_length_m: float = FIT_HALF_LENGTH_M,
     degree: int = FIT_DEGREE,
+    point: np.ndarray | None = None,
 ) -> LocalSurfaceGeometry:
     """Normal (4.1) and principal curvatures (4.2)-(4.6) at the curves' common point.
+
+    ``point`` (default ``curves.intersection``) is where the curves are fitted and the
+    geometry evaluated.
 
     With ``curves.approach`` the normal points against the approach (out of the object);
     otherwise it is oriented so that the mean normal curvature is positive (the data are
     taken as seen from outside a locally convex surface) and ``oriented`` is False.
     """
-    p = curves.intersection
+    p = curves.intersection if point is None else np.asarray(point, dtype=float)
     frames = tuple(
         curve_frame_at(c, p, half_length_m=half_length_m, degree=degree) for c in curves.curves
     )

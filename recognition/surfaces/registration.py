@@ -41,15 +41,12 @@ from enum import StrEnum
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from recognition.errors import DegenerateGeometry, InvalidCurveData
+from recognition.errors import InvalidCurveData
 from recognition.surfaces.data_curves import DataCurves
 from recognition.surfaces.distance import FieldStack
 from recognition.surfaces.local_geometry import (
     LocalSurfaceGeometry,
-    curve_frame_at,
-    normal_curvature,
-    principal_curvatures_from_normal_curvatures,
-    surface_normal,
+    local_surface_geometry,
 )
 from recognition.surfaces.mesh_model import MeshModel
 
@@ -380,28 +377,9 @@ def data_geometry(
     are sparse (the thesis's real data: 1.2 mm apart).
     """
     half_length = max(config.fit_half_length_m, config.fit_spacings * _median_spacing(curves))
-    p = common_point(curves)
-    frames = tuple(
-        curve_frame_at(c, p, half_length_m=half_length, degree=config.fit_degree)
-        for c in curves.curves
+    return local_surface_geometry(
+        curves, half_length_m=half_length, degree=config.fit_degree, point=common_point(curves)
     )
-    tangents = np.array([f.tangent for f in frames])
-    normal = surface_normal(tangents)
-    oriented = curves.approach is not None
-    if oriented:
-        normal = -normal if normal @ curves.approach > 0 else normal
-    kn = np.array([normal_curvature(f, normal) for f in frames])
-    if not oriented and kn.mean() < 0:
-        normal, kn = -normal, -kn
-    e1 = tangents[0] - normal * (tangents[0] @ normal)
-    e1 /= np.linalg.norm(e1)
-    e2 = np.cross(normal, e1)
-    angles = np.arctan2(tangents @ e2, tangents @ e1)
-    if np.min(np.abs(np.sin(angles[:, None] - angles[None, :])) + np.eye(len(angles))) < 1e-3:
-        raise DegenerateGeometry("two data curves have the same tangent direction at p")
-    k1, k2, angle1, _ = principal_curvatures_from_normal_curvatures(kn, angles)
-    d1 = np.cos(angle1) * e1 + np.sin(angle1) * e2
-    return LocalSurfaceGeometry(p, normal, k1, k2, d1, np.cross(normal, d1), frames, kn, oriented)
 
 
 def data_noise_m(curves: DataCurves) -> float:
