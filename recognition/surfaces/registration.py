@@ -178,6 +178,14 @@ class RegistrationConfig:
         A fit is good enough when its mean error is within ``accept_sigmas`` standard
         deviations of the mean distance that the data's noise alone gives, plus
         ``accept_floor_m`` (:func:`acceptable_error_m`).
+    accept_noise_cap_m
+        The noise the acceptance test assumes is at most this. The noise is estimated
+        from the data's scatter about their sampling planes, which also counts a
+        sensor's error along the surface (a contact point displaced sideways, on a
+        surface that slopes across the sampling plane): it can be many times the error
+        across the surface, which alone sets the registration error. Above the cap the
+        fallback search runs, since the first pass also relies on the normal and
+        curvatures at p that such data give poorly.
     fit_noise_factor, fit_floor_m
         The curve fits at p are trusted when they explain each curve near p, and pass
         by p, to within ``fit_noise_factor`` times the data's noise plus ``fit_floor_m``
@@ -211,6 +219,7 @@ class RegistrationConfig:
     fallback: FastSearchConfig | None = THOROUGH_SEARCH
     accept_sigmas: float = 4.0
     accept_floor_m: float = 5.0e-6
+    accept_noise_cap_m: float = 0.05e-3
     fit_noise_factor: float = 5.0
     fit_floor_m: float = 5.0e-6
     prune_ratio: float | None = 4.0
@@ -442,10 +451,11 @@ def acceptable_error_m(
     to the surface they were sampled on is sqrt(2/pi) sigma, with a relative standard
     deviation of sqrt(pi/2 - 1 / 2) / sqrt(n) over n points once the error of the noise
     estimate itself (:func:`data_noise_m`) is included; the limit lies
-    ``accept_sigmas`` such deviations above, plus ``accept_floor_m``.
+    ``accept_sigmas`` such deviations above, plus ``accept_floor_m``. The noise is
+    taken as at most ``accept_noise_cap_m``.
     """
     spread = np.sqrt(np.pi / 2 - 0.5) / np.sqrt(max(n_points, 1))
-    mean = np.sqrt(2 / np.pi) * noise_m
+    mean = np.sqrt(2 / np.pi) * min(noise_m, config.accept_noise_cap_m)
     return float(mean * (1 + config.accept_sigmas * spread) + config.accept_floor_m)
 
 

@@ -297,3 +297,67 @@ def test_the_common_point_is_where_all_three_curves_meet():
     curves = DataCurves((first, second, third))
     assert np.linalg.norm(curves.intersection) > 0.3e-3  # pairwise closest points mislead
     np.testing.assert_allclose(common_point(curves), 0.0, atol=5e-6)
+
+
+def _sideways(model, synthetic, scale_m, rng):
+    """The curves with each point moved along the surface, across its curve: the error
+    of a sensor that misjudges the contact normal where the surface slopes across the
+    sampling plane. Returns new DataCurves."""
+    T = synthetic.T_model_from_data
+    moved = []
+    for curve in synthetic.curves.curves:
+        in_model = curve @ T[:3, :3].T + T[:3, 3]
+        _, q, face = model.distance.closest(in_model)
+        normal = model.distance.face_normals[face]
+        tangent = np.gradient(in_model, axis=0)
+        across = np.cross(normal, tangent)
+        across /= np.linalg.norm(across, axis=1, keepdims=True)
+        shifted = q + scale_m * rng.standard_normal((len(q), 1)) * across
+        moved.append((shifted - T[:3, 3]) @ T[:3, :3])  # back to the data frame
+    return DataCurves(tuple(moved), approach=synthetic.curves.approach)
+
+
+def test_sideways_sensor_error_does_not_make_a_poor_fit_acceptable(models):
+    from dataclasses import replace
+
+    from recognition.surfaces.registration import (
+        FastSearchConfig,
+        RegistrationConfig,
+        acceptable_error_m,
+        data_noise_m,
+    )
+
+    model = models["blob"]
+    synthetic = _curves(model, 2500, seed=2500)
+    curves = _sideways(model, synthetic, 0.15e-3, np.random.default_rng(2))
+    T = synthetic.T_model_from_data
+    at_truth = np.mean(model.distance.closest(curves.points @ T[:3, :3].T + T[:3, 3])[0])
+    # scatter about the sampling planes as large as the displacement; hardly any distance
+    assert data_noise_m(curves) > 0.1e-3
+    assert at_truth < 0.01e-3
+    # the acceptance test takes the noise as at most accept_noise_cap_m
+    config = RegistrationConfig()
+    n = len(curves.points)
+    capped = acceptable_error_m(config.accept_noise_cap_m, n)
+    assert acceptable_error_m(data_noise_m(curves), n) == capped
+    uncapped = replace(config, accept_noise_cap_m=float("inf"))
+    assert acceptable_error_m(data_noise_m(curves), n, uncapped) > 2 * capped
+    # a first pass that hardly searches, with a pose error between the two limits: the
+    # fallback runs and finds the pose
+    poor = FastSearchConfig(
+        candidate_spacing_m=30e-3,
+        aligned_anisotropy=float("inf"),
+        scan_step_rad=np.deg2rad(120.0),
+        n_screened=1,
+        screen_iterations=0,
+        n_coarse=1,
+        coarse_iterations=0,
+        n_final=1,
+        final_iterations=0,
+    )
+    config = replace(config, search=poor, polish_iterations=0)
+    first = register(model, curves, config=replace(config, fallback=None))
+    assert capped < first.error_m < acceptable_error_m(data_noise_m(curves), n, uncapped)
+    found = register(model, curves, config=config)
+    assert found.error_m <= capped
+    np.testing.assert_allclose(found.location, synthetic.point_in_model, atol=0.3e-3)
