@@ -328,3 +328,21 @@ def test_millimetre_meshes_read_as_metres_are_named(tmp_path, monkeypatch, capsy
     assert script.main(["--mesh-dir", str(tmp_path / "meshes"), "--method", "fast"]) == 2
     last = capsys.readouterr().err.splitlines()[-1]  # after the progress bar
     assert last.startswith("error: blob") and "millimetres read as metres" in last
+
+
+def test_a_sweep_writes_one_point_per_value_with_its_figure(tmp_path, monkeypatch):
+    script = _script()
+    monkeypatch.setattr(script, "ROOT", tmp_path)
+    _write_user_meshes(tmp_path / "meshes")
+    out = tmp_path / "out"
+    argv = ["--mesh-dir", str(tmp_path / "meshes"), "--units", "mm", "--per-model", "2"]
+    assert script.main([*argv, "--sweep", "length", "--workers", "1", "--out-dir", str(out)]) == 0
+    payload = json.loads((out / "sweep_length.json").read_text())
+    assert payload["figure"] == "Fig. 4.12"
+    assert [p["value"] for p in payload["points"]] == script.SWEEPS["length"][1]
+    assert all(p["instances"] == 4 and 0 <= p["success_rate"] <= 1 for p in payload["points"])
+    # longer curves hold more points: recognition takes longer
+    times = [p["median_time_s"] for p in payload["points"]]
+    assert times[-1] > times[0]
+    assert (out / "sweep_length.png").stat().st_size > 10_000
+    assert "![Fig. 4.12](sweep_length.png)" in (out / "sweep_length.md").read_text()
