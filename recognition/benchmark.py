@@ -35,7 +35,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from recognition.errors import RecognitionError
+from recognition.errors import DegenerateGeometry, InvalidCurveData, RecognitionError
 from recognition.surfaces import closed_form as cf
 from recognition.surfaces.data_curves import DataCurves
 from recognition.surfaces.database import ModelDatabase
@@ -273,7 +273,25 @@ def _located_error_mm(location, point_in_model) -> float | None:
 
 def _recognize(database, curves: DataCurves, true_model: str, method: str, registration):
     """Recognition of ``curves`` with one method: the record's recognition fields, and the
-    true model's estimate of p (model frame, or None)."""
+    true model's estimate of p (model frame, or None).
+
+    Curves whose local geometry cannot be computed (e.g. two sampling planes that
+    coincide) are not recognised: the record says why (``error``) and counts as a failure.
+    """
+    try:
+        return _recognize_or_raise(database, curves, true_model, method, registration)
+    except (InvalidCurveData, DegenerateGeometry) as exc:
+        return {
+            "recognized": None,
+            "success": False,
+            "time_s": 0.0,
+            "errors_mm": {},
+            "times_s": {},
+            "error": f"{type(exc).__name__}: {exc}",
+        }, None
+
+
+def _recognize_or_raise(database, curves, true_model, method, registration):
     if isinstance(database, ModelDatabase):
         database.registration = registration
         result = database.recognize(curves, mode=method)

@@ -94,15 +94,25 @@ def sampling_plane_normals(
     """Normals of ``count`` planes that contain ``normal``, ``plane_angle_rad`` apart.
 
     The first plane contains ``first_direction`` (any tangent if omitted); plane k is
-    the first rotated by ``k * plane_angle_rad`` about the surface normal.
+    the first rotated by ``k * plane_angle_rad`` about the surface normal. Planes that
+    coincide (e.g. three planes 90 degrees apart: the first and the third) raise
+    :class:`InvalidCurveData`.
     """
+    angles = plane_angle_rad * np.arange(count)
+    gap = np.abs(np.sin(angles[:, None] - angles[None, :])) + np.eye(count)
+    if count > 1 and gap.min() < 1e-6:
+        i, j = sorted(np.unravel_index(np.argmin(gap), gap.shape))
+        raise InvalidCurveData(
+            f"sampling planes {i} and {j} coincide at a plane angle of "
+            f"{np.degrees(plane_angle_rad):g} degrees; expected distinct planes (for three "
+            "planes, an angle strictly between 0 and 90 degrees, or between 90 and 180)"
+        )
     n = _unit(normal)
     if first_direction is None:
         first_direction = np.eye(3)[np.argmin(np.abs(n))]
     t = np.asarray(first_direction, float) - n * (np.asarray(first_direction, float) @ n)
     t = _unit(t)
     b = np.cross(n, t)
-    angles = plane_angle_rad * np.arange(count)
     directions = np.cos(angles)[:, None] * t + np.sin(angles)[:, None] * b
     return np.cross(directions, n)  # plane normal = in-plane tangent x surface normal
 

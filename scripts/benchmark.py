@@ -42,7 +42,8 @@ SENSING_OBJECTS = ("cat", "dog", "bird")
 SWEEPS = {
     "delta": ("delta_per_mm", [0.01, 0.02, 0.03, 0.04, 0.05], "Fig. 4.11"),
     "length": ("length_mm", [6.0, 12.0, 18.0, 24.0, 30.0], "Fig. 4.12"),
-    "angle": ("plane_angle_deg", [15.0, 30.0, 45.0, 60.0, 75.0, 90.0], "Fig. 4.13"),
+    # three planes phi apart: at 90 degrees the first and the third coincide
+    "angle": ("plane_angle_deg", [10.0, 20.0, 30.0, 45.0, 60.0, 75.0, 85.0], "Fig. 4.13"),
 }
 # What the thesis reports of each sweep (Section 4.3.4; its figures print no values).
 SWEEP_THESIS = {

@@ -346,3 +346,17 @@ def test_a_sweep_writes_one_point_per_value_with_its_figure(tmp_path, monkeypatc
     assert times[-1] > times[0]
     assert (out / "sweep_length.png").stat().st_size > 10_000
     assert "![Fig. 4.12](sweep_length.png)" in (out / "sweep_length.md").read_text()
+
+
+def test_curves_without_local_geometry_are_a_failed_record(database_dir, jobs, monkeypatch):
+    from recognition.errors import DegenerateGeometry
+
+    database = ModelDatabase.load(database_dir)
+
+    def degenerate(*args, **kwargs):
+        raise DegenerateGeometry("two data curves have the same tangent direction at p")
+
+    monkeypatch.setattr(database, "recognize", degenerate)
+    (record,) = bench.run_job(database, jobs[0])
+    assert record["success"] is False and record["recognized"] is None
+    assert record["error"].startswith("DegenerateGeometry: two data curves")

@@ -57,6 +57,12 @@ def test_sampling_planes_are_spaced_by_the_plane_angle_about_the_normal():
     np.testing.assert_allclose(cosines, 0.5, atol=1e-12)
 
 
+@pytest.mark.parametrize("angle_deg", [0.0, 90.0, 180.0])
+def test_sampling_planes_that_coincide_are_refused(angle_deg):
+    with pytest.raises(InvalidCurveData, match="coincide"):
+        sampling_plane_normals([0, 0, 1.0], plane_angle_rad=np.deg2rad(angle_deg))
+
+
 def test_explicit_planes_and_noise():
     s = cf.ellipsoid()
     p = s.sigma(1.02, 0.69)
