@@ -328,6 +328,7 @@ def test_millimetre_meshes_read_as_metres_are_named(tmp_path, monkeypatch, capsy
     assert script.main(["--mesh-dir", str(tmp_path / "meshes"), "--method", "fast"]) == 2
     last = capsys.readouterr().err.splitlines()[-1]  # after the progress bar
     assert last.startswith("error: blob") and "millimetres read as metres" in last
+    assert "--units mm" in last
 
 
 def test_a_sweep_writes_one_point_per_value_with_its_figure(tmp_path, monkeypatch):

@@ -117,7 +117,8 @@ def validate_mesh(mesh: trimesh.Trimesh, name: str = "mesh") -> trimesh.Trimesh:
         raise InvalidModel(
             f"{name}: bounding box diagonal is {diagonal:.3g} m; expected an object of "
             f"{MIN_DIAGONAL_M * 1e3:.0f} mm to {MAX_DIAGONAL_M:.0f} m. It looks like a "
-            "mesh in millimetres read as metres: scale it by 1e-3 (units='mm')"
+            "mesh in millimetres read as metres: scale it by 1e-3 "
+            "(scripts/benchmark.py: --units mm)"
         )
     if diagonal < MIN_DIAGONAL_M:
         raise InvalidModel(
