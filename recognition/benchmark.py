@@ -39,7 +39,7 @@ from recognition.errors import DegenerateGeometry, InvalidCurveData, Recognition
 from recognition.surfaces import closed_form as cf
 from recognition.surfaces.data_curves import DataCurves
 from recognition.surfaces.database import ModelDatabase
-from recognition.synthetic import mesh_data_curves
+from recognition.synthetic import mesh_data_curves, sampling_plane_normals
 
 __all__ = [
     "CLOSED_FORM_METHOD",
@@ -161,6 +161,16 @@ class SyntheticSource:
     separation_m: float = 10e-3
     seed: int = 0
 
+    def __post_init__(self) -> None:
+        # planes that coincide would make every instance invalid: say so once, here
+        sampling_plane_normals([0.0, 0.0, 1.0], plane_angle_rad=np.deg2rad(self.plane_angle_deg))
+        if self.n_points < 5 or not self.spacing_m > 0 or self.per_model < 1:
+            raise InvalidCurveData(
+                f"expected at least 5 points per curve, a positive spacing and at least one "
+                f"instance per model; got n_points={self.n_points}, "
+                f"spacing_m={self.spacing_m}, per_model={self.per_model}"
+            )
+
     @property
     def length_m(self) -> float:
         return (self.n_points - 1) * self.spacing_m
@@ -278,13 +288,14 @@ def _recognize(database, curves: DataCurves, true_model: str, method: str, regis
     Curves whose local geometry cannot be computed (e.g. two sampling planes that
     coincide) are not recognised: the record says why (``error``) and counts as a failure.
     """
+    start = time.perf_counter()
     try:
         return _recognize_or_raise(database, curves, true_model, method, registration)
     except (InvalidCurveData, DegenerateGeometry) as exc:
         return {
             "recognized": None,
             "success": False,
-            "time_s": 0.0,
+            "time_s": time.perf_counter() - start,
             "errors_mm": {},
             "times_s": {},
             "error": f"{type(exc).__name__}: {exc}",
@@ -382,6 +393,7 @@ def run_job(database, job: Job) -> list[dict]:
                 "success": ref["success"],
                 "errors_mm": ref["errors_mm"],
                 "localization_error_mm": _located_error_mm(ref_location, instance.point_in_model),
+                **({"error": ref["error"]} if "error" in ref else {}),
             }
         records.append(record)
     return records

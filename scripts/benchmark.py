@@ -16,6 +16,7 @@ import hashlib
 import json
 import os
 import platform
+import shlex
 import sys
 import time
 from dataclasses import dataclass, field, replace
@@ -109,6 +110,8 @@ class Config:
     sim_spacing_mm : float or None
         With ``source="sim"``: point spacing of every experiment instead of its own
         (1.2 mm on the catalog, 0.05 mm on the solids).
+    arguments : tuple of str
+        The command-line arguments these settings came from (shown in the reports).
     """
 
     methods: tuple[str, ...] = METHODS
@@ -136,6 +139,7 @@ class Config:
     objects: tuple[str, ...] | None = None
     sim_curves: str = "sensed"
     sim_spacing_mm: float | None = None
+    arguments: tuple[str, ...] = ()
 
     def synthetic_source(self, **overrides) -> bench.SyntheticSource:
         return bench.SyntheticSource(
@@ -202,8 +206,8 @@ def _results_path(config, name, source, registration, tag=""):
     return config.results or ROOT / "runs" / "benchmark" / f"{name}{tag}_{key}.jsonl"
 
 
-def _command() -> str:
-    return f"`python scripts/benchmark.py {' '.join(sys.argv[1:])}`"
+def _command(config: Config) -> str:
+    return f"`{shlex.join(['python', 'scripts/benchmark.py', *config.arguments])}`"
 
 
 def machine() -> str:
@@ -399,7 +403,7 @@ def run_sensing(config: Config, started: str) -> dict:
         [
             "# Simulated sensing: accuracy and speed",
             "",
-            f"Command: {_command()}  ",
+            f"Command: {_command(config)}  ",
             f"Date: {started}; machine: {machine()}.  ",
             f"{len(objects)} objects x {config.sessions} sessions (3 sweeps x 21 points at "
             "1.2 mm, random pose, p and plane yaw per seed; seeds from "
@@ -451,7 +455,7 @@ def _header(config, title, source, started, path) -> list[str]:
     return [
         f"# {title}",
         "",
-        f"Command: {_command()}  ",
+        f"Command: {_command(config)}  ",
         f"Date: {started}; machine: {machine()}; workers: {config.workers} ({config.backend}).  ",
         f"Probing: {len(source.objects)} objects x {source.sessions_per_object} sessions "
         f"(seeds from --seed {source.seed}); {source.n_points} points per curve at "
@@ -785,7 +789,7 @@ def _markdown(config, database, name, records, summary, started, path) -> str:
     lines = [
         f"# Recognition benchmark: {name}",
         "",
-        f"Command: {_command()}  ",
+        f"Command: {_command(config)}  ",
         f"Date: {started}; machine: {machine()}; workers: {config.workers} ({config.backend}).  ",
         f"Instances: {config.per_model} per model, n = {config.n_points} points per curve at "
         f"d = {config.spacing_mm} mm (l = {(config.n_points - 1) * config.spacing_mm:g} mm), "
@@ -974,7 +978,7 @@ def _run_sweep(config, database, name, directory, started) -> dict:
         [
             f"# Sweep of {parameter}, thesis {figure} ({name}, fast mode)",
             "",
-            f"Command: {_command()}  ",
+            f"Command: {_command(config)}  ",
             f"Date: {started}; machine: {machine()}; workers: {config.workers} "
             f"({config.backend}).  ",
             f"Instances: {config.per_model} per model; unless swept, n = {config.n_points} "
@@ -1084,6 +1088,7 @@ def parse_args(argv=None) -> Config:
         objects=tuple(a.object) if a.object else None,
         sim_curves=a.sim_curves,
         sim_spacing_mm=a.sim_spacing_mm,
+        arguments=tuple(sys.argv[1:] if argv is None else argv),
     )
 
 
