@@ -41,6 +41,23 @@ def _curves(model, vertex, seed, noise=0.0, **kw):
     )
 
 
+def _poor_search(candidate_spacing_m, scan_step_deg):
+    """A first pass that hardly searches: few candidates, coarse phi, no refinement."""
+    from recognition.surfaces.registration import FastSearchConfig
+
+    return FastSearchConfig(
+        candidate_spacing_m=candidate_spacing_m,
+        aligned_anisotropy=float("inf"),
+        scan_step_rad=np.deg2rad(scan_step_deg),
+        n_screened=1,
+        screen_iterations=0,
+        n_coarse=1,
+        coarse_iterations=0,
+        n_final=1,
+        final_iterations=0,
+    )
+
+
 @pytest.mark.parametrize("vertex", [100, 2500, 7000])
 def test_fast_registration_recovers_the_pose_from_noise_free_curves(models, vertex):
     model = models["blob"]
@@ -216,7 +233,6 @@ def test_the_fallback_search_recovers_a_pose_that_a_sparse_first_pass_misses(mod
     from dataclasses import replace
 
     from recognition.surfaces.registration import (
-        FastSearchConfig,
         RegistrationConfig,
         acceptable_error_m,
         data_noise_m,
@@ -225,17 +241,7 @@ def test_the_fallback_search_recovers_a_pose_that_a_sparse_first_pass_misses(mod
     model = models["blob"]
     synthetic = _curves(model, 4000, seed=11, noise=0.01e-3)
     # a first pass that hardly searches: few candidates, coarse phi, no refinement
-    poor = FastSearchConfig(
-        candidate_spacing_m=15e-3,
-        aligned_anisotropy=float("inf"),
-        scan_step_rad=np.deg2rad(90.0),
-        n_screened=1,
-        screen_iterations=0,
-        n_coarse=1,
-        coarse_iterations=0,
-        n_final=1,
-        final_iterations=0,
-    )
+    poor = _poor_search(15e-3, 90.0)
     without = register(
         model,
         synthetic.curves,
@@ -321,7 +327,6 @@ def test_sideways_sensor_error_does_not_make_a_poor_fit_acceptable(models):
     from dataclasses import replace
 
     from recognition.surfaces.registration import (
-        FastSearchConfig,
         RegistrationConfig,
         acceptable_error_m,
         data_noise_m,
@@ -344,17 +349,7 @@ def test_sideways_sensor_error_does_not_make_a_poor_fit_acceptable(models):
     assert acceptable_error_m(data_noise_m(curves), n, uncapped) > 2 * capped
     # a first pass that hardly searches, with a pose error between the two limits: the
     # fallback runs and finds the pose
-    poor = FastSearchConfig(
-        candidate_spacing_m=30e-3,
-        aligned_anisotropy=float("inf"),
-        scan_step_rad=np.deg2rad(120.0),
-        n_screened=1,
-        screen_iterations=0,
-        n_coarse=1,
-        coarse_iterations=0,
-        n_final=1,
-        final_iterations=0,
-    )
+    poor = _poor_search(30e-3, 120.0)
     config = replace(config, search=poor, polish_iterations=0)
     first = register(model, curves, config=replace(config, fallback=None))
     assert capped < first.error_m < acceptable_error_m(data_noise_m(curves), n, uncapped)
