@@ -318,35 +318,39 @@ def elliptic_paraboloid(a: float = 1.5, b: float = 1.1, name: str = "elliptic_pa
     )
 
 
-def monkey_saddle(name: str = "monkey_saddle"):
-    """x^3 - 3 x y^2 = z (thesis Table 4.1); f = x^3 - 3 x y^2 - z.
+def _graph_surface(name: str, height, rotations: int) -> ClosedFormSurface:
+    """The graph z = h(x, y) over [-1, 1]^2: sigma = (u, v, h(u, v)), f = h(x, y) - z.
 
-    sigma = (u, v, u^3 - 3 u v^2), (u, v) in [-1, 1] x [-1, 1].
+    ``height(x, y)`` returns h and its partial derivatives (h, h_x, h_y, h_xx, h_xy,
+    h_yy); the surface is symmetric under ``rotations`` turns about the z axis.
     """
 
     def sigma_terms(u, v):
         z = np.zeros(np.broadcast_shapes(np.shape(u), np.shape(v)))
         one = 1.0 + z
+        h, hu, hv, huu, huv, hvv = height(u, v)
         return SigmaDerivatives(
-            _stack(u + z, v + z, u**3 - 3 * u * v**2 + z),
-            _stack(one, z, 3 * u**2 - 3 * v**2 + z),
-            _stack(z, one, -6 * u * v + z),
-            _stack(z, z, 6 * u + z),
-            _stack(z, z, -6 * v + z),
-            _stack(z, z, -6 * u + z),
+            _stack(u + z, v + z, h + z),
+            _stack(one, z, hu + z),
+            _stack(z, one, hv + z),
+            _stack(z, z, huu + z),
+            _stack(z, z, huv + z),
+            _stack(z, z, hvv + z),
         )
 
     def implicit_terms(points, order=2):
         x, y, zc = points.T
-        f = x * x * x - 3 * x * y * y - zc
+        h, hx, hy, hxx, hxy, hyy = height(x, y)
+        f = h - zc
         if order < 1:
             return f, None, None
         g = np.empty_like(points)
-        g[:, 0], g[:, 1], g[:, 2] = 3 * x * x - 3 * y * y, -6 * x * y, -1.0
+        g[:, 0], g[:, 1], g[:, 2] = hx, hy, -1.0
         if order < 2:
             return f, g, None
         H = np.zeros((points.shape[0], 3, 3))
-        H[:, 0, 0], H[:, 0, 1], H[:, 1, 0], H[:, 1, 1] = 6 * x, -6 * y, -6 * y, -6 * x
+        H[:, 0, 0], H[:, 1, 1] = hxx, hyy
+        H[:, 0, 1] = H[:, 1, 0] = hxy
         return f, g, H
 
     return ClosedFormSurface(
@@ -356,8 +360,20 @@ def monkey_saddle(name: str = "monkey_saddle"):
         (False, False),
         sigma_terms,
         implicit_terms,
-        symmetries=_rotations_about(2, 3),
+        symmetries=_rotations_about(2, rotations),
     )
+
+
+def monkey_saddle(name: str = "monkey_saddle"):
+    """x^3 - 3 x y^2 = z (thesis Table 4.1); f = x^3 - 3 x y^2 - z.
+
+    sigma = (u, v, u^3 - 3 u v^2), (u, v) in [-1, 1] x [-1, 1].
+    """
+
+    def height(x, y):
+        return x**3 - 3 * x * y**2, 3 * x**2 - 3 * y**2, -6 * x * y, 6 * x, -6 * y, -6 * x
+
+    return _graph_surface(name, height, rotations=3)
 
 
 def crossed_trough(name: str = "crossed_trough"):
@@ -366,41 +382,10 @@ def crossed_trough(name: str = "crossed_trough"):
     sigma = (u, v, u^2 v^2), (u, v) in [-1, 1] x [-1, 1].
     """
 
-    def sigma_terms(u, v):
-        z = np.zeros(np.broadcast_shapes(np.shape(u), np.shape(v)))
-        one = 1.0 + z
-        return SigmaDerivatives(
-            _stack(u + z, v + z, u**2 * v**2 + z),
-            _stack(one, z, 2 * u * v**2 + z),
-            _stack(z, one, 2 * u**2 * v + z),
-            _stack(z, z, 2 * v**2 + z),
-            _stack(z, z, 4 * u * v + z),
-            _stack(z, z, 2 * u**2 + z),
-        )
+    def height(x, y):
+        return x**2 * y**2, 2 * x * y**2, 2 * x**2 * y, 2 * y**2, 4 * x * y, 2 * x**2
 
-    def implicit_terms(points, order=2):
-        x, y, zc = points.T
-        f = x * x * y * y - zc
-        if order < 1:
-            return f, None, None
-        g = np.empty_like(points)
-        g[:, 0], g[:, 1], g[:, 2] = 2 * x * y * y, 2 * x * x * y, -1.0
-        if order < 2:
-            return f, g, None
-        H = np.zeros((points.shape[0], 3, 3))
-        H[:, 0, 0], H[:, 1, 1] = 2 * y**2, 2 * x**2
-        H[:, 0, 1] = H[:, 1, 0] = 4 * x * y
-        return f, g, H
-
-    return ClosedFormSurface(
-        name,
-        MappingProxyType({}),
-        ((-1.0, 1.0), (-1.0, 1.0)),
-        (False, False),
-        sigma_terms,
-        implicit_terms,
-        symmetries=_rotations_about(2, 4),
-    )
+    return _graph_surface(name, height, rotations=4)
 
 
 def elliptic_cylinder(a: float, b: float, half_length: float, name: str = "elliptic_cylinder"):
