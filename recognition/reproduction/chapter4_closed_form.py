@@ -119,6 +119,23 @@ class SurfaceExperiment:
             fit_max_turn=self.fit_max_turn,
         )
 
+    def data_curves(self, surface: cf.ClosedFormSurface, u: float, v: float, rng):
+        """:func:`noisy_data_curves` through sigma(u, v) on this experiment's planes
+        (:func:`tilted_plane_normals`), points and noise."""
+        planes = tilted_plane_normals(
+            surface.normal(u, v), rng, self.plane_angle_deg, self.plane_tilt_deg
+        )
+        return noisy_data_curves(
+            surface,
+            u,
+            v,
+            rng,
+            n_points=self.n_points,
+            spacing=self.spacing,
+            noise=self.noise,
+            plane_normals=planes,
+        )
+
     def describe(self) -> str:
         return (
             f"{self.n_points} points per curve every {self.spacing:g}, uniform noise within "
@@ -256,19 +273,7 @@ def _instance(job) -> dict:
     rng = _rng(experiment.seed, 42, i, k)
     (u0, u1), (v0, v1) = SAMPLE_DOMAINS[surface.name]
     u, v = rng.uniform(u0, u1), rng.uniform(v0, v1)
-    planes = tilted_plane_normals(
-        surface.normal(u, v), rng, experiment.plane_angle_deg, experiment.plane_tilt_deg
-    )
-    curves, point, _, _ = noisy_data_curves(
-        surface,
-        u,
-        v,
-        rng,
-        n_points=experiment.n_points,
-        spacing=experiment.spacing,
-        noise=experiment.noise,
-        plane_normals=planes,
-    )
+    curves, point, _, _ = experiment.data_curves(surface, u, v, rng)
     recognition = cf.recognize(curves, models, experiment.config())
     own = recognition.registrations[surface.name]
     return {
@@ -478,19 +483,7 @@ def _fig_4_5_data(experiment: SurfaceExperiment):
     surface = cf.elliptic_paraboloid(1.5, 1.1)
     rng = _rng(experiment.seed, 45)
     u, v = 1.21, 0.43
-    planes = tilted_plane_normals(
-        surface.normal(u, v), rng, experiment.plane_angle_deg, experiment.plane_tilt_deg
-    )
-    curves, point, T_true, clean = noisy_data_curves(
-        surface,
-        u,
-        v,
-        rng,
-        n_points=experiment.n_points,
-        spacing=experiment.spacing,
-        noise=experiment.noise,
-        plane_normals=planes,
-    )
+    curves, point, T_true, clean = experiment.data_curves(surface, u, v, rng)
     return surface, curves, point, T_true, clean
 
 
@@ -721,19 +714,7 @@ def figures(
     # Fig. 4.3: curves from the ellipsoid at (1.02, 0.69), placed at (0.31, 0.63)
     ellipsoid = cf.ellipsoid(1.0, 0.8, 0.5)
     rng = _rng(experiment.seed, 43)
-    planes = tilted_plane_normals(
-        ellipsoid.normal(1.02, 0.69), rng, experiment.plane_angle_deg, experiment.plane_tilt_deg
-    )
-    curves, *_ = noisy_data_curves(
-        ellipsoid,
-        1.02,
-        0.69,
-        rng,
-        n_points=experiment.n_points,
-        spacing=experiment.spacing,
-        noise=experiment.noise,
-        plane_normals=planes,
-    )
+    curves, *_ = experiment.data_curves(ellipsoid, 1.02, 0.69, rng)
     geometry = cf.data_geometry(curves, experiment.config())
     X = cf.local_coordinates(geometry, curves.points)
     phi = np.linspace(0, 2 * np.pi, 721)
