@@ -12,6 +12,7 @@ from pathlib import Path
 
 import pytest
 from testing_meshes import blob, ellipsoid
+from testing_scripts import load_script
 
 from recognition import benchmark as bench
 from recognition.surfaces import closed_form as cf
@@ -243,20 +244,8 @@ def test_simulated_instances_are_reproducible_and_recorded(tmp_path):
     }
 
 
-def _script():
-    import importlib.util
-
-    name = "scripts_benchmark"
-    if name not in sys.modules:
-        spec = importlib.util.spec_from_file_location(name, ROOT / "scripts" / "benchmark.py")
-        module = importlib.util.module_from_spec(spec)
-        sys.modules[name] = module
-        spec.loader.exec_module(module)
-    return sys.modules[name]
-
-
 def test_script_reports_an_unknown_object_and_exits_2(tmp_path, capsys):
-    script = _script()
+    script = load_script("benchmark")
     assert script.main(["--source", "sim", "--object", "unicorn", "--out-dir", str(tmp_path)]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1
@@ -264,7 +253,7 @@ def test_script_reports_an_unknown_object_and_exits_2(tmp_path, capsys):
 
 
 def test_script_parses_the_sim_options():
-    config = _script().parse_args(
+    config = load_script("benchmark").parse_args(
         ["--source", "sim", "--experiment", "solids", "--sessions", "2", "--tag", "_x"]
     )
     assert config.source == "sim"
@@ -275,7 +264,7 @@ def test_script_parses_the_sim_options():
 
 @pytest.mark.slow
 def test_sensing_experiment_measures_points_and_wall_times(tmp_path):
-    script = _script()
+    script = load_script("benchmark")
     config = script.parse_args(
         ["--source", "sim", "--experiment", "sensing", "--sessions", "1", "--object", "bird"]
     )
@@ -299,7 +288,7 @@ def _write_user_meshes(directory: Path) -> None:
 
 
 def test_user_meshes_in_millimetres_are_benchmarked(tmp_path, monkeypatch, capsys):
-    script = _script()
+    script = load_script("benchmark")
     monkeypatch.setattr(script, "ROOT", tmp_path)  # database cache and records go here
     _write_user_meshes(tmp_path / "meshes")
     argv = ["--mesh-dir", str(tmp_path / "meshes"), "--units", "mm", "--per-model", "2"]
@@ -324,7 +313,7 @@ def test_user_meshes_in_millimetres_are_benchmarked(tmp_path, monkeypatch, capsy
 
 
 def test_millimetre_meshes_read_as_metres_are_named(tmp_path, monkeypatch, capsys):
-    script = _script()
+    script = load_script("benchmark")
     monkeypatch.setattr(script, "ROOT", tmp_path)
     _write_user_meshes(tmp_path / "meshes")
     assert script.main(["--mesh-dir", str(tmp_path / "meshes"), "--method", "fast"]) == 2
@@ -334,7 +323,7 @@ def test_millimetre_meshes_read_as_metres_are_named(tmp_path, monkeypatch, capsy
 
 
 def test_a_sweep_writes_one_point_per_value_with_its_figure(tmp_path, monkeypatch):
-    script = _script()
+    script = load_script("benchmark")
     monkeypatch.setattr(script, "ROOT", tmp_path)
     _write_user_meshes(tmp_path / "meshes")
     out = tmp_path / "out"
@@ -367,7 +356,7 @@ def test_curves_without_local_geometry_are_a_failed_record(database_dir, jobs, m
 
 
 def test_sampling_planes_that_coincide_are_refused_before_any_instance(tmp_path, capsys):
-    script = _script()
+    script = load_script("benchmark")
     argv = ["--plane-angle", "90", "--method", "fast", "--out-dir", str(tmp_path)]
     assert script.main(argv) == 2
     err = capsys.readouterr().err

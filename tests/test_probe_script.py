@@ -1,30 +1,19 @@
 """scripts/probe.py end to end: probe, recognise, report, save; bad input exits 2."""
 
-import importlib.util
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
+from testing_scripts import load_script
 
 from recognition import DataCurves
 
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def _probe_script():
-    name = "scripts_probe"
-    if name not in sys.modules:
-        spec = importlib.util.spec_from_file_location(name, ROOT / "scripts" / "probe.py")
-        module = importlib.util.module_from_spec(spec)
-        sys.modules[name] = module
-        spec.loader.exec_module(module)
-    return sys.modules[name]
-
-
 def test_pose_error_is_the_rotation_angle_and_the_mean_displacement_of_the_data():
-    probe = _probe_script()
+    probe = load_script("probe")
     rng = np.random.default_rng(0)
     points = rng.normal(scale=0.01, size=(30, 3))
     T = np.eye(4)
@@ -43,7 +32,7 @@ def test_pose_error_is_the_rotation_angle_and_the_mean_displacement_of_the_data(
 
 @pytest.mark.slow
 def test_probing_an_object_recognises_it_and_saves_its_curves(tmp_path, capsys):
-    probe = _probe_script()
+    probe = load_script("probe")
     config = probe.parse_args(["--object", "bird", "--seed", "1", "--rerun", "off"])
     summary = probe.run(probe.Config(**{**vars(config), "out": tmp_path}))
     assert summary["recognized"] == "bird" and summary["correct"]
@@ -57,7 +46,7 @@ def test_probing_an_object_recognises_it_and_saves_its_curves(tmp_path, capsys):
 
 
 def test_an_unknown_object_lists_the_known_ones_and_exits_2(tmp_path, capsys):
-    probe = _probe_script()
+    probe = load_script("probe")
     assert probe.main(["--object", "unicorn", "--rerun", "off", "--out", str(tmp_path)]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1

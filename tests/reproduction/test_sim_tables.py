@@ -1,12 +1,11 @@
 """Tables 3.4 and 3.5 from measured tactile points: exact points, then the simulated robot."""
 
-import importlib.util
 import json
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
+from testing_scripts import load_script
 
 from recognition.reproduction import chapter3
 
@@ -61,21 +60,9 @@ def test_table_3_5_from_exact_points_recovers_the_spline_segments():
         assert entry["all eight"]["relative_error_percent"] < 1.0
 
 
-def _script():
-    name = "scripts_reproduce_thesis"
-    if name not in sys.modules:
-        spec = importlib.util.spec_from_file_location(
-            name, ROOT / "scripts" / "reproduce_thesis.py"
-        )
-        module = importlib.util.module_from_spec(spec)
-        sys.modules[name] = module
-        spec.loader.exec_module(module)
-    return sys.modules[name]
-
-
 def test_sim_source_is_refused_for_tables_without_one(capsys):
     with pytest.raises(SystemExit) as exit_info:
-        _script().parse_args(["--table", "3.3", "--source", "sim"])
+        load_script("reproduce_thesis").parse_args(["--table", "3.3", "--source", "sim"])
     assert exit_info.value.code == 2
     assert "--source sim applies to table" in capsys.readouterr().err
 
@@ -100,7 +87,7 @@ def test_traced_outline_points_lie_on_the_ellipse():
 
 @pytest.mark.slow
 def test_table_3_4_from_the_simulated_robot(tmp_path):
-    script = _script()
+    script = load_script("reproduce_thesis")
     path = tmp_path / "table_3_4_sim.json"
     config = script.Config(tables=("3.4",), json_path=path, source="sim", sim_trials=2)
     (result,) = script.run(config)

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import dataclasses
-import importlib.util
 import json
 import os
 import subprocess
@@ -13,6 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import trimesh
+from testing_scripts import load_script
 
 from tactile_sim.errors import AssetError, SimulationError, UnknownObject
 from tactile_sim.objects import (
@@ -381,12 +381,8 @@ def test_build_prints_one_line_message(tmp_assets, capsys):
 # --- render script ----------------------------------------------------------------------
 
 
-def test_render_script_writes_pngs(catalog, tmp_path, monkeypatch):
-    path = Path(__file__).resolve().parents[2] / "scripts" / "render_objects.py"
-    spec = importlib.util.spec_from_file_location("render_objects", path)
-    module = importlib.util.module_from_spec(spec)
-    monkeypatch.setitem(sys.modules, "render_objects", module)
-    spec.loader.exec_module(module)
+def test_render_script_writes_pngs(catalog, tmp_path):
+    module = load_script("render_objects")
     config = module.RenderConfig(
         objects=("stone", "pear"), out_dir=tmp_path, faces=1500, image_size_in=2.0, dpi=50
     )

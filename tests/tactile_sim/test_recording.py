@@ -3,19 +3,18 @@
 from __future__ import annotations
 
 import base64
-import importlib.util
 import io
 import json
 import os
 import select
 import socket
 import subprocess
-import sys
 import time
 from pathlib import Path
 
 import numpy as np
 import pytest
+from testing_scripts import load_script
 
 from tactile_sim.errors import InvalidRecording, PortInUse, SimulationError
 from tactile_sim.probing import probe_object, resolve_object
@@ -51,16 +50,6 @@ def recording(session, recognized, tmp_path_factory):
     path = tmp_path_factory.mktemp("recording") / "sphere_seed3.rrd"
     assert record_probe_run(session, result, database, mode="save", path=path) == str(path)
     return path
-
-
-def _script(name: str):
-    module_name = f"scripts_{name}"
-    if module_name not in sys.modules:
-        spec = importlib.util.spec_from_file_location(module_name, ROOT / "scripts" / f"{name}.py")
-        module = importlib.util.module_from_spec(spec)
-        sys.modules[module_name] = module
-        spec.loader.exec_module(module)
-    return sys.modules[module_name]
 
 
 # Trajectory capture ------------------------------------------------------------------------
@@ -184,7 +173,7 @@ def test_a_recording_without_its_footer_is_reported_truncated(tmp_path):
 
 
 def test_replay_reports_bad_files_in_one_line_with_status_2(recording, tmp_path, capsys):
-    replay = _script("replay")
+    replay = load_script("replay")
     truncated = tmp_path / "cut.rrd"
     truncated.write_bytes(recording.read_bytes()[:4000])
     for path in (tmp_path / "missing.rrd", truncated):
@@ -209,7 +198,7 @@ def test_port_in_use_is_reported_with_a_free_alternative():
 def test_bad_modes_and_probe_options_are_rejected(session, tmp_path):
     with pytest.raises(ValueError, match="mode"):
         record_probe_run(session, mode="stream", path=tmp_path / "x.rrd")
-    probe = _script("probe")
+    probe = load_script("probe")
     config = probe.parse_args(["--object", "cat", "--rerun", "serve", "--web-port", "9191"])
     assert (config.rerun, config.web_port, config.grpc_port) == ("serve", 9191, 9876)
 
