@@ -201,6 +201,18 @@ def _jobs(database, config, methods, source, registration, limit_thesis=True):
     return jobs
 
 
+def _run(config: Config, database, jobs, path) -> list[dict]:
+    """The jobs' records (resumed from ``path``) on the configured workers and backend."""
+    return bench.run(
+        database,
+        jobs,
+        path,
+        workers=config.workers,
+        backend=config.backend,
+        ray_address=config.ray_address,
+    )
+
+
 def _results_path(config, name, source, registration, tag=""):
     key = bench.settings_key(source, registration)
     return config.results or ROOT / "runs" / "benchmark" / f"{name}{tag}_{key}.jsonl"
@@ -225,14 +237,8 @@ def run(config: Config) -> dict:
         return _run_sweep(config, database, name, directory, started)
     source, registration = config.synthetic_source(), config.registration()
     path = _results_path(config, name, source, registration)
-    records = bench.run(
-        directory,
-        _jobs(database, config, config.methods, source, registration),
-        path,
-        workers=config.workers,
-        backend=config.backend,
-        ray_address=config.ray_address,
-    )
+    jobs = _jobs(database, config, config.methods, source, registration)
+    records = _run(config, directory, jobs, path)
     records = [r for r in records if r["method"] in config.methods]
     summary = bench.summarize(records)
     if config.json_path:
@@ -308,14 +314,7 @@ def run_sim(config: Config) -> dict:
         ]
         name = f"sim_{experiment}"
         path = _results_path(config, name, source, registration, config.tag)
-        records = bench.run(
-            handle,
-            jobs,
-            path,
-            workers=config.workers,
-            backend=config.backend,
-            ray_address=config.ray_address,
-        )
+        records = _run(config, handle, jobs, path)
         wanted = {(j.spec.key, m) for j in jobs for m in j.methods}
         key = bench.settings_key(source, registration)
         records = [
@@ -927,14 +926,7 @@ def _run_sweep(config, database, name, directory, started) -> dict:
         )
         path = _results_path(config, name, source, registration, f"_sweep_{config.sweep}")
         jobs = _jobs(database, config, ("fast",), source, registration)
-        records = bench.run(
-            directory,
-            jobs,
-            path,
-            workers=config.workers,
-            backend=config.backend,
-            ray_address=config.ray_address,
-        )
+        records = _run(config, directory, jobs, path)
         results[value] = bench.summarize(r for r in records if r["method"] == "fast")["fast"]
     payload = {
         "parameter": parameter,
