@@ -38,7 +38,13 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import ConvexHull
 
 from tactile_sim.errors import InvalidMesh, UnknownObject
-from tactile_sim.objects.cache import build_lock, generated_dir, read_npz, write_npz_atomic
+from tactile_sim.objects.cache import (
+    build_lock,
+    generated_dir,
+    is_triangle_arrays,
+    read_npz,
+    write_npz_atomic,
+)
 
 if TYPE_CHECKING:
     from tactile_sim.objects import ObjectModel
@@ -410,10 +416,7 @@ def _read_parts(path: Path, key: str, source: str) -> ConvexParts | None:
     vertex_counts, face_counts = arrays["vertex_counts"], arrays["face_counts"]
     if (
         meta.get("key") != key
-        or vertices.ndim != 2
-        or vertices.shape[1:] != (3,)
-        or faces.ndim != 2
-        or faces.shape[1:] != (3,)
+        or not is_triangle_arrays(vertices, faces)
         or vertex_counts.shape != face_counts.shape
         or vertex_counts.ndim != 1
         or len(vertex_counts) == 0

@@ -112,6 +112,18 @@ def read_npz(path: Path, names: tuple[str, ...]) -> tuple[dict[str, np.ndarray],
     return arrays, meta
 
 
+def is_triangle_arrays(vertices: np.ndarray, faces: np.ndarray) -> bool:
+    """True if ``vertices`` is (n, 3) float and ``faces`` (m, 3) integer (a cached mesh)."""
+    return (
+        vertices.ndim == 2
+        and vertices.shape[1:] == (3,)
+        and faces.ndim == 2
+        and faces.shape[1:] == (3,)
+        and np.issubdtype(vertices.dtype, np.floating)
+        and np.issubdtype(faces.dtype, np.integer)
+    )
+
+
 @contextlib.contextmanager
 def build_lock(path: Path) -> Iterator[None]:
     """Hold an exclusive lock on ``path`` (a lock file) while building what it guards.

@@ -25,6 +25,7 @@ from tactile_sim.errors import UnknownObject
 from tactile_sim.objects.cache import (
     build_lock,
     generated_dir,
+    is_triangle_arrays,
     read_npz,
     recipes_dir,
     write_npz_atomic,
@@ -143,12 +144,7 @@ def _model_from_arrays(name: str, key: str, arrays: dict, meta: dict) -> ObjectM
     vertices, faces = arrays["vertices"], arrays["faces"]
     if (
         meta.get("key") != key
-        or vertices.ndim != 2
-        or vertices.shape[1:] != (3,)
-        or faces.ndim != 2
-        or faces.shape[1:] != (3,)
-        or not np.issubdtype(vertices.dtype, np.floating)
-        or not np.issubdtype(faces.dtype, np.integer)
+        or not is_triangle_arrays(vertices, faces)
         or faces.size == 0
         or faces.min() < 0
         or faces.max() >= len(vertices)
