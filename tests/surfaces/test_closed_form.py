@@ -25,6 +25,14 @@ def interior_parameters(surface, rng, n, margin=0.1):
     return u, v
 
 
+def points_near(surface, rng, n, spread):
+    """n random points of the surface's interior moved off it by noise of ``spread``
+    times its scale (same draws as sigma(interior_parameters) plus normal noise)."""
+    return surface.sigma(*interior_parameters(surface, rng, n)) + rng.normal(
+        scale=spread * scale(surface), size=(n, 3)
+    )
+
+
 def scale(surface):
     """Characteristic length of a surface (1 for Table 4.1, tens of mm for Fig. 4.15)."""
     return float(np.linalg.norm(surface.sigma(*[np.mean(d) for d in surface.domain]))) or 1.0
@@ -51,9 +59,7 @@ def test_sigma_derivatives_match_finite_differences(surface):
 def test_implicit_gradient_and_hessian_match_finite_differences(surface):
     rng = np.random.default_rng(2)
     L = scale(surface)
-    points = surface.sigma(*interior_parameters(surface, rng, 6)) + rng.normal(
-        scale=0.1 * L, size=(6, 3)
-    )
+    points = points_near(surface, rng, 6, 0.1)
     h = 1e-6 * L
     g = surface.gradient(points)
     H = surface.hessian(points)
@@ -216,9 +222,7 @@ def random_local_points(surface, rng, n=60):
 def test_point_distance_residual_gradient(surface):
     rng = np.random.default_rng(10)
     L = scale(surface)
-    p = surface.sigma(*interior_parameters(surface, rng, 8)) + rng.normal(
-        scale=0.05 * L, size=(8, 3)
-    )
+    p = points_near(surface, rng, 8, 0.05)
     _, dr = cf.point_distance_residuals(surface, p)
     h = 1e-6 * L
     for k in range(3):
