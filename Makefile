@@ -1,4 +1,5 @@
-# The two commands of the README: `make demo` and `make test`.
+# The two commands of the README, `make demo` and `make test`, and `make lint` (style and
+# types), which CI runs as well.
 # Each creates .venv from pyproject.toml when it is missing or older than pyproject.toml.
 
 PYTHON ?= python3
@@ -37,6 +38,7 @@ test: $(STAMP) chromium
 lint: $(STAMP)
 	$(PY) -m ruff check .
 	$(PY) -m ruff format --check .
+	$(PY) -m mypy
 
 clean:
 	rm -rf $(VENV) .pytest_cache .ruff_cache
