@@ -14,13 +14,17 @@ from recognition.errors import (
     RecognitionError,
 )
 from recognition.surfaces.data_curves import DataCurves
-from recognition.surfaces.database import ModelDatabase, Recognition
+from recognition.surfaces.database import DATABASE_FORMAT, ModelDatabase
+from recognition.surfaces.mesh_model import MeshModelConfig
+from recognition.surfaces.registration import Recognition
 
 __all__ = [
+    "DATABASE_FORMAT",
     "DataCurves",
     "DegenerateGeometry",
     "InvalidCurveData",
     "InvalidModel",
+    "MeshModelConfig",
     "ModelDatabase",
     "NoRealSolution",
     "Recognition",

@@ -39,6 +39,7 @@ from recognition.errors import DegenerateGeometry, InvalidCurveData, Recognition
 from recognition.surfaces import closed_form as cf
 from recognition.surfaces.data_curves import DataCurves
 from recognition.surfaces.database import ModelDatabase
+from recognition.surfaces.registration import RegistrationConfig, recognize
 from recognition.synthetic import mesh_data_curves, sampling_plane_normals
 
 __all__ = [
@@ -281,7 +282,7 @@ def _located_error_mm(location, point_in_model) -> float | None:
     return float(np.linalg.norm(np.asarray(location) - point_in_model) * 1e3)
 
 
-def _recognize(database, curves: DataCurves, true_model: str, method: str, registration):
+def _recognize(database, curves: DataCurves, true_model: str, config: RegistrationConfig):
     """Recognition of ``curves`` with one method: the record's recognition fields, and the
     true model's estimate of p (model frame, or None).
 
@@ -290,7 +291,7 @@ def _recognize(database, curves: DataCurves, true_model: str, method: str, regis
     """
     start = time.perf_counter()
     try:
-        return _recognize_or_raise(database, curves, true_model, method, registration)
+        return _recognize_or_raise(database, curves, true_model, config)
     except (InvalidCurveData, DegenerateGeometry) as exc:
         return {
             "recognized": None,
@@ -302,10 +303,9 @@ def _recognize(database, curves: DataCurves, true_model: str, method: str, regis
         }, None
 
 
-def _recognize_or_raise(database, curves, true_model, method, registration):
+def _recognize_or_raise(database, curves, true_model, config: RegistrationConfig):
     if isinstance(database, ModelDatabase):
-        database.registration = registration
-        result = database.recognize(curves, mode=method)
+        result = database.recognize(curves, config)
         truth = result.registrations.get(true_model)
         return {
             "recognized": result.name,
@@ -317,30 +317,18 @@ def _recognize_or_raise(database, curves, true_model, method, registration):
             "k1": result.geometry.k1,
             "k2": result.geometry.k2,
         }, (None if truth is None else truth.location)
-    if method != CLOSED_FORM_METHOD:
-        raise RecognitionError(
-            f"closed-form models are recognised with method {CLOSED_FORM_METHOD!r}, got {method!r}"
-        )
-    # thesis Eq. (4.9) over the closed-form models (cf.recognize, each model timed)
-    start = time.perf_counter()
-    geometry = cf.data_geometry(curves, registration)
-    registrations, times = {}, {}
-    for model in database:
-        t0 = time.perf_counter()
-        registrations[model.name] = cf.register(curves, model, registration, geometry)
-        times[model.name] = time.perf_counter() - t0
-    ranking = sorted(((n, r.error) for n, r in registrations.items()), key=lambda t: t[1])
-    name = ranking[0][0] if np.isfinite(ranking[0][1]) else None
+    # thesis Eq. (4.9) over the closed-form models
+    result = recognize(database, curves, config)
     # The solids are symmetric (thesis Section 4.4.2): no location is compared.
     return {
-        "recognized": name,
-        "success": name == true_model,
-        "time_s": time.perf_counter() - start,
-        "errors_mm": {n: _mm(e) for n, e in ranking},
-        "times_s": times,
-        "candidates": {n: int(r.candidates.shape[0]) for n, r in registrations.items()},
-        "k1": float(geometry.k1),
-        "k2": float(geometry.k2),
+        "recognized": result.name,
+        "success": result.name == true_model,
+        "time_s": result.time_s,
+        "errors_mm": {n: _mm(e) for n, e in result.ranking},
+        "times_s": result.timings_s,
+        "candidates": {n: int(r.candidates.shape[0]) for n, r in result.registrations.items()},
+        "k1": float(result.geometry.k1),
+        "k2": float(result.geometry.k2),
     }, None
 
 
@@ -366,8 +354,8 @@ def run_job(database, job: Job) -> list[dict]:
         "instance_time_s": made_s,
     }
     records = []
-    for method in job.methods:
-        record = {**base, "method": method}
+    for config in job.configs:
+        record = {**base, "method": config.mode.value}
         if instance.curves is None:
             record |= {
                 "recognized": None,
@@ -379,15 +367,11 @@ def run_job(database, job: Job) -> list[dict]:
             }
             records.append(record)
             continue
-        fields, location = _recognize(
-            database, instance.curves, spec.model, method, job.registration
-        )
+        fields, location = _recognize(database, instance.curves, spec.model, config)
         record |= fields
         record["localization_error_mm"] = _located_error_mm(location, instance.point_in_model)
         if instance.reference_curves is not None:
-            ref, ref_location = _recognize(
-                database, instance.reference_curves, spec.model, method, job.registration
-            )
+            ref, ref_location = _recognize(database, instance.reference_curves, spec.model, config)
             record["reference"] = {
                 "recognized": ref["recognized"],
                 "success": ref["success"],
@@ -403,11 +387,10 @@ def run_instance(
     database,
     spec: InstanceSpec,
     source: InstanceSource,
-    method: str,
-    registration,
+    config: RegistrationConfig,
 ) -> dict:
     """Recognise one instance with one method; a JSON-ready record."""
-    return run_job(database, Job(spec, source, (method,), registration))[0]
+    return run_job(database, Job(spec, source, (config,)))[0]
 
 
 # --- records ----------------------------------------------------------------------------
@@ -482,18 +465,21 @@ class Job:
     spec : InstanceSpec
     source : InstanceSource
         Makes the instance from ``spec``.
-    methods : tuple of str
-    registration : RegistrationConfig or closed_form.RegistrationConfig
+    configs : tuple of RegistrationConfig
+        One per method (the config's class names it).
     """
 
     spec: InstanceSpec
     source: Any
-    methods: tuple[str, ...]
-    registration: Any
+    configs: tuple[RegistrationConfig, ...]
 
     @property
-    def settings(self) -> str:
-        return settings_key(self.source, self.registration)
+    def methods(self) -> tuple[str, ...]:
+        return tuple(c.mode.value for c in self.configs)
+
+    def settings(self, config: RegistrationConfig) -> str:
+        """The settings key of the records made with ``config``."""
+        return settings_key(self.source, config)
 
 
 _WORKER_DB: Any = None
@@ -536,8 +522,8 @@ def settings_key(source, registration, extra=()) -> str:
 def _as_job(job) -> Job:
     if isinstance(job, Job):
         return job
-    spec, source, method, registration = job
-    return Job(spec, source, (method,), registration)
+    spec, source, config = job
+    return Job(spec, source, (config,))
 
 
 def run(
@@ -559,7 +545,7 @@ def run(
         A :class:`ModelDatabase` directory (every worker loads it) or the closed-form
         models.
     jobs : sequence of Job
-        (Tuples ``(spec, source, method, registration)`` are taken as one-method jobs.)
+        (Tuples ``(spec, source, config)`` are taken as one-method jobs.)
     results_path : Path
         JSONL file of records; created when missing. Every record carries a
         ``settings`` hash; an (instance, method) counts as done when a record with the
@@ -589,23 +575,23 @@ def run(
     done = {(r["instance"], r["method"], r.get("settings")) for r in read_results(results_path)}
     todo, total = [], 0
     for job in map(_as_job, jobs):
-        settings = job.settings
-        missing = tuple(m for m in job.methods if (job.spec.key, m, settings) not in done)
-        total += len(job.methods)
+        missing = tuple(
+            c for c in job.configs if (job.spec.key, c.mode.value, job.settings(c)) not in done
+        )
+        total += len(job.configs)
         if missing:
-            todo.append(Job(job.spec, job.source, missing, job.registration))
+            todo.append(Job(job.spec, job.source, missing))
     bar = None
     if progress:
         from tqdm import tqdm
 
-        pending = sum(len(job.methods) for job in todo)
+        pending = sum(len(job.configs) for job in todo)
         bar = tqdm(total=total, initial=total - pending, unit="record", desc="benchmark")
 
     def record(job: Job, records: list[dict]) -> None:
-        settings = job.settings
         with results_path.open("a") as f:
-            for rec in records:
-                rec["settings"] = settings
+            for rec, config in zip(records, job.configs, strict=True):
+                rec["settings"] = job.settings(config)
                 f.write(json.dumps(rec) + "\n")
             f.flush()
             os.fsync(f.fileno())

@@ -170,9 +170,12 @@ def _solve(M: Array, rhs: Array, method: LinearSolve) -> Array:
     if method is LinearSolve.LU:
         return np.linalg.solve(M, rhs[..., None])[..., 0]
     w, V = np.linalg.eigh(M)
-    keep = w > 1e-10 * np.maximum(w[:, -1:], 1e-300)
-    coefficients = np.einsum("bij,bi->bj", V, rhs) / np.where(keep, w, 1.0)
-    return np.einsum("bij,bj->bi", V, np.where(keep, coefficients, 0.0))
+    out = np.empty_like(rhs)
+    for b in range(len(M)):  # the kept directions differ from problem to problem
+        keep = w[b] > 1e-10 * max(w[b, -1], 1e-300)
+        Vk = V[b][:, keep]
+        out[b] = Vk @ ((Vk.T @ rhs[b]) / w[b][keep])
+    return out
 
 
 def _steps(

@@ -31,7 +31,7 @@ from recognition.errors import RecognitionError
 from recognition.reproduction.chapter4_closed_form import TABLE_4_5_THESIS, SolidExperiment
 from recognition.reproduction.tables import markdown_table
 from recognition.surfaces.database import ModelDatabase
-from recognition.surfaces.registration import RegistrationConfig
+from recognition.surfaces.registration import RegistrationConfig, config_for
 from tactile_sim.errors import SimulationError
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -151,8 +151,8 @@ class Config:
             seed=self.seed,
         )
 
-    def registration(self, **overrides) -> RegistrationConfig:
-        return RegistrationConfig(delta=overrides.get("delta_per_mm", self.delta_per_mm) * 1e3)
+    def registration(self, method: str = "fast", **overrides) -> RegistrationConfig:
+        return config_for(method, delta=overrides.get("delta_per_mm", self.delta_per_mm) * 1e3)
 
 
 def load_database(config: Config) -> tuple[ModelDatabase, str]:
@@ -189,7 +189,7 @@ def load_database(config: Config) -> tuple[ModelDatabase, str]:
     return ModelDatabase.load(directory), Path(config.mesh_dir).name
 
 
-def _jobs(database, config, methods, source, registration, limit_thesis=True):
+def _jobs(database, config, methods, source, overrides=None, limit_thesis=True):
     specs = bench.instance_specs(database, source)
     jobs = []
     for method in methods:
@@ -197,7 +197,8 @@ def _jobs(database, config, methods, source, registration, limit_thesis=True):
         if method == "thesis" and limit_thesis and config.thesis_instances:
             # spread over the models: instance 0 of each, then 1, ...
             chosen = sorted(specs, key=lambda s: (s.index, s.model))[: config.thesis_instances]
-        jobs += [(spec, source, method, registration) for spec in chosen]
+        registration = config.registration(method, **(overrides or {}))
+        jobs += [bench.Job(spec, source, (registration,)) for spec in chosen]
     return jobs
 
 
@@ -237,7 +238,7 @@ def run(config: Config) -> dict:
         return _run_sweep(config, database, name, directory, started)
     source, registration = config.synthetic_source(), config.registration()
     path = _results_path(config, name, source, registration)
-    jobs = _jobs(database, config, config.methods, source, registration)
+    jobs = _jobs(database, config, config.methods, source)
     records = _run(config, directory, jobs, path)
     records = [r for r in records if r["method"] in config.methods]
     summary = bench.summarize(records)
@@ -290,12 +291,12 @@ def run_sim(config: Config) -> dict:
             database = catalog_database()
             handle, names = database.directory, database.names
             registration = config.registration()
-            methods = config.methods
+            configs = {m: config.registration(m) for m in config.methods}
         else:
             database = handle = bench.ClosedFormModels()
             names = database.names
             registration = SolidExperiment().config()
-            methods = (bench.CLOSED_FORM_METHOD,)
+            configs = {registration.mode.value: registration}
         specs = source.specs(database)
         thesis_keys = {
             s.key
@@ -307,8 +308,7 @@ def run_sim(config: Config) -> dict:
             bench.Job(
                 spec,
                 source,
-                tuple(m for m in methods if m != "thesis" or spec.key in thesis_keys),
-                registration,
+                tuple(c for m, c in configs.items() if m != "thesis" or spec.key in thesis_keys),
             )
             for spec in specs
         ]
@@ -316,11 +316,11 @@ def run_sim(config: Config) -> dict:
         path = _results_path(config, name, source, registration, config.tag)
         records = _run(config, handle, jobs, path)
         wanted = {(j.spec.key, m) for j in jobs for m in j.methods}
-        key = bench.settings_key(source, registration)
+        keys = {m: bench.settings_key(source, c) for m, c in configs.items()}
         records = [
             r
             for r in records
-            if (r["instance"], r["method"]) in wanted and r.get("settings") == key
+            if (r["instance"], r["method"]) in wanted and r.get("settings") == keys[r["method"]]
         ]
         found = bench.summarize(records)
         summary |= found
@@ -925,7 +925,7 @@ def _run_sweep(config, database, name, directory, started) -> dict:
             config.registration(**overrides),
         )
         path = _results_path(config, name, source, registration, f"_sweep_{config.sweep}")
-        jobs = _jobs(database, config, ("fast",), source, registration)
+        jobs = _jobs(database, config, ("fast",), source, overrides)
         records = _run(config, directory, jobs, path)
         results[value] = bench.summarize(r for r in records if r["method"] == "fast")["fast"]
     payload = {

@@ -15,9 +15,8 @@ from testing_meshes import blob, ellipsoid
 from testing_scripts import load_script
 
 from recognition import benchmark as bench
-from recognition.surfaces import closed_form as cf
 from recognition.surfaces.database import ModelDatabase
-from recognition.surfaces.registration import RegistrationConfig
+from recognition.surfaces.registration import ClosedFormConfig, FastConfig
 
 ROOT = Path(__file__).resolve().parents[1]
 SOURCE = bench.SyntheticSource(per_model=4, n_points=21, spacing_m=1.2e-3, separation_m=5e-3)
@@ -35,7 +34,7 @@ def database_dir(tmp_path_factory) -> Path:
 def jobs(database_dir):
     specs = SOURCE.specs(ModelDatabase.load(database_dir))
     assert len(specs) == 8
-    return [bench.Job(spec, SOURCE, ("fast",), RegistrationConfig()) for spec in specs]
+    return [bench.Job(spec, SOURCE, (FastConfig(),)) for spec in specs]
 
 
 @pytest.fixture(scope="module")
@@ -54,7 +53,7 @@ def test_a_run_writes_one_record_per_instance_and_method(uninterrupted, jobs):
     assert len(uninterrupted) == len(jobs)
     assert {r["instance"] for r in uninterrupted} == {j.spec.key for j in jobs}
     settings = {r["settings"] for r in uninterrupted}
-    assert settings == {bench.settings_key(SOURCE, RegistrationConfig())}
+    assert settings == {bench.settings_key(SOURCE, FastConfig())}
     summary = bench.summarize(uninterrupted)["fast"]
     assert set(summary) >= {
         "success_rate",
@@ -103,9 +102,7 @@ def test_truncated_last_line_is_ignored_and_its_instance_redone(
 def test_other_settings_are_not_taken_for_done(database_dir, jobs, uninterrupted, tmp_path):
     path = tmp_path / "records.jsonl"
     path.write_text("".join(json.dumps(r) + "\n" for r in uninterrupted))
-    other = [
-        bench.Job(j.spec, j.source, j.methods, RegistrationConfig(delta=20.0)) for j in jobs[:2]
-    ]
+    other = [bench.Job(j.spec, j.source, (FastConfig(delta=20.0),)) for j in jobs[:2]]
     again: list[dict] = []
     bench.run(database_dir, other, path, progress=False, on_record=again.append)
     assert len(again) == 2
@@ -116,11 +113,11 @@ import sys
 from pathlib import Path
 from recognition import benchmark as bench
 from recognition.surfaces.database import ModelDatabase
-from recognition.surfaces.registration import RegistrationConfig
+from recognition.surfaces.registration import FastConfig
 source = bench.SyntheticSource(per_model=4, n_points=21, spacing_m=1.2e-3, separation_m=5e-3)
 database = Path(sys.argv[1])
 specs = source.specs(ModelDatabase.load(database))
-jobs = [bench.Job(s, source, ("fast",), RegistrationConfig()) for s in specs]
+jobs = [bench.Job(s, source, (FastConfig(),)) for s in specs]
 slow = lambda record: __import__("time").sleep(0.5)
 bench.run(database, jobs, Path(sys.argv[2]), progress=False, on_record=slow)
 """
@@ -196,11 +193,11 @@ import sys
 from pathlib import Path
 from recognition import benchmark as bench
 from recognition.surfaces.database import ModelDatabase
-from recognition.surfaces.registration import RegistrationConfig
+from recognition.surfaces.registration import FastConfig
 source = bench.SyntheticSource(per_model=4, n_points=21, spacing_m=1.2e-3, separation_m=5e-3)
 database = Path(sys.argv[1])
 specs = source.specs(ModelDatabase.load(database))
-jobs = [bench.Job(s, source, ("fast",), RegistrationConfig()) for s in specs]
+jobs = [bench.Job(s, source, (FastConfig(),)) for s in specs]
 bench.run(database, jobs, Path(sys.argv[2]), workers=2, backend="ray",
           ray_address=sys.argv[3], progress=False)
 """
@@ -229,8 +226,8 @@ def test_simulated_instances_are_reproducible_and_recorded(tmp_path):
     assert [s.key for s in specs] == ["sphere/0", "sphere/1"]
     assert specs[0].seed != specs[1].seed
     models = bench.ClosedFormModels()
-    registration = cf.RegistrationConfig(delta=float("inf"), max_candidates=4)
-    jobs = [bench.Job(s, source, (bench.CLOSED_FORM_METHOD,), registration) for s in specs]
+    registration = ClosedFormConfig(delta=float("inf"), max_candidates=4)
+    jobs = [bench.Job(s, source, (registration,)) for s in specs]
     records = bench.run(models, jobs, tmp_path / "sim.jsonl", progress=False)
     assert len(records) == 2
     for r in records:

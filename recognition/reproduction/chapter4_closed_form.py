@@ -29,11 +29,19 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from recognition.reproduction.tables import TableResult, markdown_table, save_figure
+from recognition.rigid import random_rigid_motion
 from recognition.surfaces import closed_form as cf
 from recognition.surfaces.data_curves import DataCurves
+from recognition.surfaces.registration import (
+    ClosedFormConfig,
+    ClosedFormRegistration,
+    Optimizer,
+    data_geometry,
+    recognize,
+    register,
+)
 from recognition.synthetic import (
     implicit_data_curves,
-    random_rigid_transform,
     sampling_plane_normals,
 )
 
@@ -86,7 +94,7 @@ class SurfaceExperiment:
     grid : (int, int)
         Lookup table size (n_u, n_v).
     fit_half_length, fit_degree, fit_max_turn
-        Local fits of the data curves (:func:`recognition.surfaces.closed_form.data_geometry`).
+        Local fits of the data curves (:func:`recognition.surfaces.registration.data_geometry`).
     optimizer : str
         ``levenberg_marquardt`` (default) or ``steepest_descent`` (the thesis's).
     rigid_refinement : bool
@@ -109,14 +117,17 @@ class SurfaceExperiment:
     rigid_refinement: bool = True
     seed: int = 0
 
-    def config(self) -> cf.RegistrationConfig:
-        return cf.RegistrationConfig(
+    def config(self) -> ClosedFormConfig:
+        return ClosedFormConfig(
             delta=self.delta,
-            optimizer=cf.Optimizer(self.optimizer),
+            optimizer=Optimizer(self.optimizer),
             rigid_refinement=self.rigid_refinement,
-            fit_half_length=self.fit_half_length,
-            fit_degree=self.fit_degree,
-            fit_max_turn=self.fit_max_turn,
+            geometry=replace(
+                ClosedFormConfig().geometry,
+                fit_half_length_m=self.fit_half_length,
+                fit_degree=self.fit_degree,
+                fit_max_turn=self.fit_max_turn,
+            ),
         )
 
     def data_curves(self, surface: cf.ClosedFormSurface, u: float, v: float, rng):
@@ -172,8 +183,8 @@ class SolidExperiment:
     max_candidates: int = 4
     seed: int = 0
 
-    def config(self) -> cf.RegistrationConfig:
-        return cf.RegistrationConfig(delta=self.delta_per_m, max_candidates=self.max_candidates)
+    def config(self) -> ClosedFormConfig:
+        return ClosedFormConfig(delta=self.delta_per_m, max_candidates=self.max_candidates)
 
     def describe(self) -> str:
         return (
@@ -246,7 +257,7 @@ def noisy_data_curves(
         transform=False,
     )
     clean = synthetic.clean_curves_in_model
-    T = random_rigid_transform(rng, translation_scale)
+    T = random_rigid_motion(rng, translation_scale)
     R, t = T[:3, :3], T[:3, 3]
     noisy = [c + rng.uniform(-noise, noise, c.shape) for c in clean]
     curves = DataCurves(
@@ -274,7 +285,7 @@ def _instance(job) -> dict:
     (u0, u1), (v0, v1) = SAMPLE_DOMAINS[surface.name]
     u, v = rng.uniform(u0, u1), rng.uniform(v0, v1)
     curves, point, _, _ = experiment.data_curves(surface, u, v, rng)
-    recognition = cf.recognize(curves, models, experiment.config())
+    recognition = recognize(models, curves, experiment.config())
     own = recognition.registrations[surface.name]
     return {
         "surface": surface.name,
@@ -288,7 +299,7 @@ def _instance(job) -> dict:
         "location": own.location.tolist(),
         "distance": surface.symmetric_distance(point, own.location),
         "raw_distance": float(np.linalg.norm(own.location - point)),
-        "error": float(own.error),
+        "error": float(own.error_m),
         "candidates": int(own.candidates.shape[0]),
         "iterations": int(own.iterations),
         "status": own.status.value,
@@ -498,14 +509,15 @@ def fig_4_5(experiment: SurfaceExperiment = SurfaceExperiment()) -> TableResult:
     surface, curves, point, T_true, _ = _fig_4_5_data(experiment)
     model = cf.ClosedFormModel.build(surface, *experiment.grid)
     config = experiment.config()
-    geometry = cf.data_geometry(curves, config)
+    geometry = data_geometry(curves, config.geometry)
     normal_in_model = T_true[:3, :3] @ geometry.normal
     true_normal = surface.normal(1.21, 0.43)
     k_true = [float(k) for k in surface.principal_curvatures(1.21, 0.43)]
-    registration = cf.register(curves, model, config, geometry)
+    registration = register(model, curves, config, geometry=geometry)
+    assert isinstance(registration, ClosedFormRegistration)
     X = cf.local_coordinates(geometry, curves.points)
     lookup = cf.candidate_rows(
-        model.table,
+        model,
         geometry.k1,
         geometry.k2,
         config.delta,
@@ -537,7 +549,7 @@ def fig_4_5(experiment: SurfaceExperiment = SurfaceExperiment()) -> TableResult:
                 surface.symmetric_image(point, registration.location), 1.21, 0.43
             )
         ),
-        "registration_error": registration.error,
+        "registration_error": registration.error_m,
         "distance": surface.symmetric_distance(point, registration.location),
         "pose_rotation_error_deg": float(
             np.degrees(
@@ -552,7 +564,7 @@ def fig_4_5(experiment: SurfaceExperiment = SurfaceExperiment()) -> TableResult:
         ["k1", FIG_4_5_THESIS["k1"], measured["k1"], measured["true_k1"]],
         ["k2", FIG_4_5_THESIS["k2"], measured["k2"], measured["true_k2"]],
         ["candidates (searched)", "3 (3)", f"{len(lookup)} ({len(initial)})", "-"],
-        ["best E after local search", 0.000662, registration.error, "-"],
+        ["best E after local search", 0.000662, registration.error_m, "-"],
         [
             "p* (u, v), symmetric copy nearest p",
             FIG_4_5_THESIS["estimate_uv"],
@@ -635,8 +647,10 @@ def _solid_matrix(experiment: SolidExperiment):
             noise=experiment.noise_m,
             plane_normals=sampling_plane_normals(solid.normal(u, v), rng.normal(size=3)),
         )
-        recognition = cf.recognize(curves, models, config)
-        matrix[solid.name] = {name: 1e3 * r.error for name, r in recognition.registrations.items()}
+        recognition = recognize(models, curves, config)
+        matrix[solid.name] = {
+            name: 1e3 * r.error_m for name, r in recognition.registrations.items()
+        }
     names = [s.name for s in solids]
     diagonal = all(min(matrix[o], key=matrix[o].get) == o for o in names)
     return matrix, diagonal
@@ -715,7 +729,7 @@ def figures(
     ellipsoid = cf.ellipsoid(1.0, 0.8, 0.5)
     rng = _rng(experiment.seed, 43)
     curves, *_ = experiment.data_curves(ellipsoid, 1.02, 0.69, rng)
-    geometry = cf.data_geometry(curves, experiment.config())
+    geometry = data_geometry(curves, experiment.config().geometry)
     X = cf.local_coordinates(geometry, curves.points)
     phi = np.linspace(0, 2 * np.pi, 721)
     fig, ax = plt.subplots(figsize=(7, 4))
@@ -730,7 +744,7 @@ def figures(
     # Fig. 4.5: data curves at their true place and as registered
     surface, curves, _, T_true, _ = _fig_4_5_data(experiment)
     model = cf.ClosedFormModel.build(surface, *experiment.grid)
-    registration = cf.register(curves, model, experiment.config())
+    registration = register(model, curves, experiment.config())
     fig = plt.figure(figsize=(7, 6))
     ax = fig.add_subplot(projection="3d")
     uu, vv = np.meshgrid(np.linspace(0, 2 * np.pi, 60), np.linspace(0, 1, 30))

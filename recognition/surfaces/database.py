@@ -7,8 +7,7 @@ import os
 import tempfile
 import time
 from collections.abc import Callable, Mapping
-from concurrent.futures import ThreadPoolExecutor
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict
 from pathlib import Path
 
 import numpy as np
@@ -17,71 +16,31 @@ import trimesh
 from recognition.errors import InvalidModel
 from recognition.surfaces.data_curves import DataCurves
 from recognition.surfaces.distance import DistanceField, FieldStack
-from recognition.surfaces.local_geometry import LocalSurfaceGeometry
-from recognition.surfaces.mesh_model import CurvatureTable, MeshModel, MeshModelConfig
+from recognition.surfaces.lookup import CurvatureTable
+from recognition.surfaces.mesh_model import MeshModel, MeshModelConfig
 from recognition.surfaces.registration import (
-    Registration,
-    RegistrationConfig,
+    CONFIGS,
+    FastConfig,
+    IcpConfig,
+    Recognition,
     RegistrationMode,
+    ThesisConfig,
     data_geometry,
-    register,
-    register_fast,
+    rank,
+    register_all,
     registration_mode,
 )
 
-__all__ = ["DATABASE_FORMAT", "ModelDatabase", "Recognition"]
+__all__ = ["DATABASE_FORMAT", "MeshRegistrationConfig", "ModelDatabase", "Recognition"]
+
+MeshRegistrationConfig = FastConfig | ThesisConfig | IcpConfig
+"""The settings of a registration mode on mesh models."""
 
 #: Version of the on-disk format; a different version is rebuilt, never read.
 DATABASE_FORMAT = 4
-#: Thesis and ICP modes: models whose registration error is computed exactly (the best
-#: by their own error); the fast mode decides which models to polish itself.
-EXACT_TOP = 3
 #: Default largest registration error (metres) of a recognised model: data that fit no
 #: model better than this are not recognised (name None).
 MAX_ERROR_M = 0.5e-3
-
-
-@dataclass(frozen=True)
-class Recognition:
-    """Result of recognising data curves against a database (thesis Eq. (4.9)).
-
-    Attributes
-    ----------
-    name : str or None
-        Best model, or None when every model was rejected or fits worse than
-        ``max_error_m``.
-    ranking : list of (str, float)
-        (model, registration error in metres), ascending; rejected models: inf.
-    pose : (4, 4) float
-        T_model_from_data of the best model (NaN when ``name`` is None).
-    location : (3,) float
-        The curves' common point p on the best model, model frame.
-    margin_m : float
-        Second-best error minus best error, metres (inf if only one model fits).
-    registrations : dict of str to Registration
-    timings_s : dict of str to float
-        Registration time per model (fast mode: each model's share of the batched
-        search, in proportion to the point evaluations made for it).
-    time_s : float
-        Total time, local geometry included.
-    geometry : LocalSurfaceGeometry
-        The data's normal and principal curvatures at p.
-    """
-
-    name: str | None
-    ranking: list[tuple[str, float]]
-    pose: np.ndarray
-    location: np.ndarray
-    margin_m: float
-    registrations: dict[str, Registration]
-    timings_s: dict[str, float]
-    time_s: float
-    geometry: LocalSurfaceGeometry = field(repr=False)
-
-    @property
-    def best(self) -> Registration | None:
-        """The best model's registration (even when it fits worse than the threshold)."""
-        return self.registrations.get(self.ranking[0][0]) if self.ranking else None
 
 
 def _write_atomic(path: Path, writer: Callable) -> None:
@@ -102,9 +61,8 @@ class ModelDatabase:
     Parameters
     ----------
     models : mapping of str to MeshModel
-    registration : RegistrationConfig
-    mode : {"fast", "thesis", "icp-baseline"}
-        Default registration mode of :meth:`recognize`.
+    registration : FastConfig, ThesisConfig or IcpConfig
+        The default registration of :meth:`recognize` (its class names the mode).
     threads : int
         Thesis and ICP modes: models registered concurrently by :meth:`recognize` (numpy
         releases the GIL in the heavy array work); results do not depend on it. The fast
@@ -114,15 +72,13 @@ class ModelDatabase:
     def __init__(
         self,
         models: Mapping[str, MeshModel],
-        registration: RegistrationConfig = RegistrationConfig(),
-        mode: RegistrationMode | str = RegistrationMode.FAST,
+        registration: MeshRegistrationConfig = FastConfig(),
         threads: int = 1,
-    ):
+    ) -> None:
         if not models:
             raise InvalidModel("a model database needs at least one model")
         self.models = dict(models)
         self.registration = registration
-        self.mode = RegistrationMode(mode)
         self.threads = threads
         #: Where the database was loaded from (None if built in memory).
         self.directory: Path | None = None
@@ -161,7 +117,7 @@ class ModelDatabase:
         meshes: Mapping[str, trimesh.Trimesh],
         *,
         config: MeshModelConfig = MeshModelConfig(),
-        registration: RegistrationConfig = RegistrationConfig(),
+        registration: MeshRegistrationConfig = FastConfig(),
         progress: bool = False,
     ) -> ModelDatabase:
         """Validate each mesh (metres) and build its lookup table, curvature map and field."""
@@ -196,11 +152,11 @@ class ModelDatabase:
                 "vertices": model.vertices,
                 "faces": model.faces,
                 "normals": model.normals,
-                "table_vertex": table.vertex,
+                "table_vertex": table.site,
                 "table_k1": table.k1,
                 "table_k2": table.k2,
                 "table_d1": table.d1,
-                "vertex_index": dense.vertex,
+                "vertex_index": dense.site,
                 "vertex_k1": dense.k1.astype(np.float32),
                 "vertex_k2": dense.k2.astype(np.float32),
                 "vertex_d1": dense.d1.astype(np.float32),
@@ -227,7 +183,7 @@ class ModelDatabase:
         cls,
         directory,
         *,
-        registration: RegistrationConfig = RegistrationConfig(),
+        registration: MeshRegistrationConfig = FastConfig(),
         config: MeshModelConfig | None = None,
     ) -> ModelDatabase:
         """Read a database written by :meth:`save`.
@@ -286,6 +242,7 @@ class ModelDatabase:
     def recognize(
         self,
         curves: DataCurves,
+        registration: MeshRegistrationConfig | None = None,
         *,
         mode: RegistrationMode | str | None = None,
         max_error_m: float = MAX_ERROR_M,
@@ -296,73 +253,46 @@ class ModelDatabase:
         Parameters
         ----------
         curves : DataCurves
+        registration : FastConfig, ThesisConfig or IcpConfig, optional
+            The registration (default: the database's).
         mode : {"fast", "thesis", "icp-baseline"}, optional
-            Registration mode (default: the database's).
+            Another mode than the database's, with its defaults but the database's
+            table-lookup tolerance and data geometry settings (ignored with
+            ``registration``).
         max_error_m : float
             A best error above this means the curves fit no model: ``name`` is None.
         models : list of str, optional
             Restrict recognition to these models.
         """
         start = time.perf_counter()
-        mode = registration_mode(mode or self.mode)
-        geometry = data_geometry(curves, self.registration)
+        config = registration or self._config_of(mode)
+        geometry = data_geometry(curves, config.geometry)
         names = models or self.names
-        if mode is RegistrationMode.FAST:
+        chosen = [self.models[n] for n in names]
+        if isinstance(config, FastConfig):
             index = {n: i for i, n in enumerate(self.names)}
-            found = register_fast(
-                [self.models[n] for n in names],
+            found = register_all(
+                chosen,
                 curves,
-                geometry,
-                self.registration,
+                config,
+                geometry=geometry,
                 stack=self.field_stack,
                 which_field=np.array([index[n] for n in names]),
             )
-            registrations = dict(zip(names, found, strict=True))
         else:
-            registrations = self._register_each(curves, names, mode, geometry)
-        ranking = sorted(
-            ((n, r.error_m) for n, r in registrations.items()), key=lambda item: item[1]
-        )
-        best_name, best_error = ranking[0]
-        second = ranking[1][1] if len(ranking) > 1 else float("inf")
-        fits = np.isfinite(best_error) and best_error <= max_error_m
-        best = registrations[best_name]
-        return Recognition(
-            best_name if fits else None,
-            ranking,
-            best.T_model_from_data if fits else np.full((4, 4), np.nan),
-            best.location if fits else np.full(3, np.nan),
-            float(second - best_error) if np.isfinite(best_error) else float("inf"),
-            registrations,
-            {n: r.time_s for n, r in registrations.items()},
-            time.perf_counter() - start,
-            geometry,
-        )
+            found = register_all(chosen, curves, config, geometry=geometry, threads=self.threads)
+        registrations = dict(zip(names, found, strict=True))
+        return rank(registrations, geometry, time.perf_counter() - start, max_error_m)
 
-    def _register_each(self, curves, names, mode, geometry) -> dict[str, Registration]:
-        """Thesis and ICP modes: each model on its own; the best few get exact errors."""
-
-        def one(name):
-            return register(
-                self.models[name],
-                curves,
-                mode=mode,
-                config=self.registration,
-                geometry=geometry,
-                exact=False,
-            )
-
-        if self.threads > 1 and len(names) > 1:
-            with ThreadPoolExecutor(self.threads) as pool:
-                registrations = dict(zip(names, pool.map(one, names), strict=True))
-        else:
-            registrations = {name: one(name) for name in names}
-        order = sorted(registrations.items(), key=lambda kv: kv[1].error_m)[:EXACT_TOP]
-        for rank, (name, _) in enumerate(order):
-            registrations[name] = registrations[name].with_exact_error(
-                self.models[name], curves, refine=rank == 0, point=geometry.point
-            )
-        return registrations
+    def _config_of(self, mode: RegistrationMode | str | None) -> MeshRegistrationConfig:
+        """The database's registration, or ``mode``'s with the database's shared fields."""
+        own = self.registration
+        if mode is None or registration_mode(mode) is own.mode:
+            return own
+        config = CONFIGS[registration_mode(mode)](delta=own.delta, geometry=own.geometry)
+        if not isinstance(config, FastConfig | ThesisConfig | IcpConfig):
+            raise InvalidModel(f"mode {mode!r} does not register mesh models")
+        return config
 
 
 def _safe(name: str) -> str:

@@ -12,7 +12,7 @@ object, convex regions have positive curvature, k1 >= k2.
 from __future__ import annotations
 
 import hashlib
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
@@ -21,9 +21,9 @@ from scipy.spatial import cKDTree
 
 from recognition.errors import InvalidModel
 from recognition.surfaces.distance import DistanceField, MeshDistance
+from recognition.surfaces.lookup import CurvatureTable
 
 __all__ = [
-    "CurvatureTable",
     "MeshModel",
     "MeshModelConfig",
     "adaptive_sample",
@@ -347,38 +347,6 @@ def paraboloid_curvatures(
     k1 = np.median(np.array(k1s), axis=0)
     k2 = np.median(np.array(k2s), axis=0)
     return np.maximum(k1, k2), np.minimum(k1, k2), dirs[len(fit_sizes) // 2]
-
-
-@dataclass(frozen=True)
-class CurvatureTable:
-    """Principal curvatures at sampled vertices with a (k1, k2) range query, Eq. (4.7).
-
-    Attributes
-    ----------
-    vertex : (m,) int
-        Sampled vertex indices.
-    k1, k2 : (m,) float
-        Principal curvatures, 1/m.
-    d1 : (m, 3) float
-        Principal direction of k1.
-    """
-
-    vertex: np.ndarray
-    k1: np.ndarray
-    k2: np.ndarray
-    d1: np.ndarray
-    _tree: cKDTree = field(init=False, repr=False, compare=False)
-
-    def __post_init__(self):
-        object.__setattr__(self, "_tree", cKDTree(np.column_stack([self.k1, self.k2])))
-
-    def __len__(self) -> int:
-        return self.vertex.size
-
-    def query(self, k1: float, k2: float, delta: float) -> np.ndarray:
-        """Rows i with sqrt((k1 - k1_i)^2 + (k2 - k2_i)^2) < delta, thesis Eq. (4.7)."""
-        rows = self._tree.query_ball_point([k1, k2], r=delta, return_sorted=False)
-        return np.sort(np.asarray(rows, dtype=np.int64))
 
 
 class MeshModel:

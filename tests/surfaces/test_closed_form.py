@@ -11,6 +11,7 @@ from scipy.spatial.transform import Rotation
 
 from recognition.errors import InvalidModel
 from recognition.surfaces import closed_form as cf
+from recognition.surfaces.closed_form.superposition import _phi_terms
 from recognition.surfaces.local_geometry import LocalSurfaceGeometry
 
 SURFACES = cf.table_4_1_surfaces() + cf.fig_4_15_solids()
@@ -183,7 +184,7 @@ def test_invalid_parameters_raise_invalid_model():
     with pytest.raises(InvalidModel, match="radius"):
         cf.sphere(float("nan"))
     with pytest.raises(InvalidModel, match="2 x 2 grid"):
-        cf.curvature_lookup(cf.sphere(1.0), 1, 10)
+        cf.ClosedFormModel.build(cf.sphere(1.0), 1, 10)
 
 
 # --- frames and the superposition error ---------------------------------------------------
@@ -324,9 +325,10 @@ def test_initial_phi_finds_the_global_minimum_over_phi():
 
 def test_lookup_table_matches_a_brute_force_range_query():
     s = cf.ellipsoid()
-    table = cf.curvature_lookup(s, 60, 30)
-    assert len(table) == 1800 and table.shape == (60, 30)
-    assert table.v.min() > 0 and table.v.max() < np.pi  # cell centres: no pole
+    model = cf.ClosedFormModel.build(s, 60, 30)
+    table = model.table
+    assert len(table) == 1800 and model.shape == (60, 30)
+    assert model.v.min() > 0 and model.v.max() < np.pi  # cell centres: no pole
     for k1, k2, delta in ((1.2, 0.7, 0.1), (3.0, 0.6, 0.3), (9.0, 9.0, 0.5)):
         rows = table.query(k1, k2, delta)
         dist = np.hypot(table.k1 - k1, table.k2 - k2)
@@ -338,22 +340,22 @@ def test_lookup_table_matches_a_brute_force_range_query():
 
 def test_candidates_are_separated_and_not_symmetric_copies():
     s = cf.ellipsoid()
-    table = cf.curvature_lookup(s, 120, 60)
-    rows = cf.candidate_rows(table, 1.2, 0.7, 0.2, 0.15, 50)
-    plain = cf.candidate_rows(table, 1.2, 0.7, 0.2, 0.15, 50, s.symmetries)
+    model = cf.ClosedFormModel.build(s, 120, 60)
+    rows = cf.candidate_rows(model, 1.2, 0.7, 0.2, 0.15, 50)
+    plain = cf.candidate_rows(model, 1.2, 0.7, 0.2, 0.15, 50, s.symmetries)
     assert 0 < len(plain) < len(rows) <= 50
     for chosen, maps in ((rows, [np.eye(3)]), (plain, [np.eye(3), *s.symmetries])):
-        p = table.points[chosen]
+        p = model.points[chosen]
         for i in range(len(p)):
             for j in range(i):
                 assert min(np.linalg.norm(S @ p[j] - p[i]) for S in maps) >= 0.15
-    assert len(cf.candidate_rows(table, 1.2, 0.7, 0.2, 0.15, 3)) == 3
+    assert len(cf.candidate_rows(model, 1.2, 0.7, 0.2, 0.15, 3)) == 3
 
 
 def test_phi_slope_used_by_the_bisection_matches_finite_differences():
     s = cf.monkey_saddle()
     X = random_local_points(s, np.random.default_rng(16))
-    terms = cf._phi_terms(s, X, 0.3, -0.2)
+    terms = _phi_terms(s, X, 0.3, -0.2)
     phi = np.linspace(0.1, 6.0, 9)
     E, slope = terms(phi)
     h = 1e-6

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 from recognition.errors import DegenerateGeometry
+from recognition.rigid import random_rigid_motion
 from recognition.surfaces import closed_form as cf
 from recognition.surfaces.data_curves import DataCurves
 from recognition.surfaces.local_geometry import (
@@ -20,7 +21,7 @@ from recognition.surfaces.local_geometry import (
     principal_curvatures_thesis,
     surface_normal,
 )
-from recognition.synthetic import implicit_data_curves, random_rigid_transform
+from recognition.synthetic import implicit_data_curves
 
 
 def angle_deg(a, b):
@@ -100,7 +101,7 @@ def test_estimates_are_invariant_under_a_rigid_motion_of_the_data():
     s = cf.ellipsoid()
     rng = np.random.default_rng(5)
     synthetic = implicit_data_curves(s, s.sigma(1.02, 0.69), spacing=0.005, rng=rng)
-    T = random_rigid_transform(rng, 1.0)
+    T = random_rigid_motion(rng, 1.0)
     a = local_surface_geometry(synthetic.curves, half_length_m=0.1)
     b = local_surface_geometry(synthetic.curves.transformed(T), half_length_m=0.1)
     assert (b.k1, b.k2) == pytest.approx((a.k1, a.k2), rel=1e-9)

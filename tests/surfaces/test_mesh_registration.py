@@ -74,9 +74,9 @@ def test_registration_is_unchanged_by_a_rigid_motion_of_the_data(models):
     synthetic = _curves(model, 4000, seed=1, noise=0.02e-3)
     a = register(model, synthetic.curves)
     rng = np.random.default_rng(5)
-    from recognition.synthetic import random_rigid_transform
+    from recognition.rigid import random_rigid_motion
 
-    T = random_rigid_transform(rng)
+    T = random_rigid_motion(rng)
     b = register(model, synthetic.curves.transformed(T))
     np.testing.assert_allclose(b.location, a.location, atol=0.05e-3)
     assert abs(b.error_m - a.error_m) < 1e-6
@@ -86,20 +86,30 @@ def test_registration_is_unchanged_by_a_rigid_motion_of_the_data(models):
 def test_other_modes_register_on_the_right_place(models, mode):
     from dataclasses import replace
 
-    from recognition.surfaces.registration import RegistrationConfig
+    from recognition.surfaces.registration import config_for
 
     model = models["blob"]
     synthetic = _curves(model, 2500, seed=2500, noise=0.01e-3)
-    config = replace(RegistrationConfig(), thesis_max_candidates=3)
-    result = register(model, synthetic.curves, mode=mode, config=config)
+    config = config_for(mode)
+    if mode == "thesis":
+        config = replace(config, max_candidates=3)
+    result = register(model, synthetic.curves, config)
     assert np.isfinite(result.error_m)
     assert np.linalg.norm(result.location - synthetic.point_in_model) < 1.5e-3
 
 
 def test_unknown_mode_is_named(models):
     synthetic = _curves(models["blob"], 100, seed=0)
+    from recognition.surfaces.registration import config_for
+
     with pytest.raises(InvalidCurveData, match="unknown registration mode 'slow'"):
-        register(models["blob"], synthetic.curves, mode="slow")
+        config_for("slow")
+    with pytest.raises(InvalidCurveData, match="unknown registration mode 'slow'"):
+        ModelDatabase({"blob": models["blob"]}).recognize(synthetic.curves, mode="slow")
+    from recognition.surfaces.registration import ClosedFormConfig
+
+    with pytest.raises(InvalidModel, match="registers ClosedFormModels"):
+        register(models["blob"], synthetic.curves, ClosedFormConfig())
 
 
 def test_small_database_recognises_each_model(database, models):
@@ -131,7 +141,7 @@ def test_database_round_trip(tmp_path, database, models):
     assert loaded.names == database.names
     for name in models:
         a, b = database[name], loaded[name]
-        np.testing.assert_array_equal(a.table.vertex, b.table.vertex)
+        np.testing.assert_array_equal(a.table.site, b.table.site)
         np.testing.assert_allclose(a.table.k1, b.table.k1)
         np.testing.assert_allclose(a.distance_field.values, b.distance_field.values)
         assert a.hash == b.hash
@@ -233,7 +243,7 @@ def test_the_fallback_search_recovers_a_pose_that_a_sparse_first_pass_misses(mod
     from dataclasses import replace
 
     from recognition.surfaces.registration import (
-        RegistrationConfig,
+        FastConfig,
         acceptable_error_m,
         data_noise_m,
     )
@@ -245,11 +255,11 @@ def test_the_fallback_search_recovers_a_pose_that_a_sparse_first_pass_misses(mod
     without = register(
         model,
         synthetic.curves,
-        config=RegistrationConfig(search=poor, fallback=None, polish_iterations=0),
+        config=FastConfig(search=poor, fallback=None, polish_iterations=0),
     )
     limit = acceptable_error_m(data_noise_m(synthetic.curves), len(synthetic.curves.points))
     assert without.error_m > limit
-    config = replace(RegistrationConfig(), search=poor, polish_iterations=0)
+    config = replace(FastConfig(), search=poor, polish_iterations=0)
     with_fallback = register(model, synthetic.curves, config=config)
     assert with_fallback.error_m <= limit
     np.testing.assert_allclose(with_fallback.location, synthetic.point_in_model, atol=0.2e-3)
@@ -327,7 +337,7 @@ def test_sideways_sensor_error_does_not_make_a_poor_fit_acceptable(models):
     from dataclasses import replace
 
     from recognition.surfaces.registration import (
-        RegistrationConfig,
+        FastConfig,
         acceptable_error_m,
         data_noise_m,
     )
@@ -341,7 +351,7 @@ def test_sideways_sensor_error_does_not_make_a_poor_fit_acceptable(models):
     assert data_noise_m(curves) > 0.1e-3
     assert at_truth < 0.01e-3
     # the acceptance test takes the noise as at most accept_noise_cap_m
-    config = RegistrationConfig()
+    config = FastConfig()
     n = len(curves.points)
     capped = acceptable_error_m(config.accept_noise_cap_m, n)
     assert acceptable_error_m(data_noise_m(curves), n) == capped

@@ -5,11 +5,8 @@ import pytest
 
 from recognition.errors import DegenerateGeometry, InvalidCurveData
 from recognition.surfaces import closed_form as cf
-from recognition.synthetic import (
-    implicit_data_curves,
-    resample_around,
-    sampling_plane_normals,
-)
+from recognition.surfaces.sections import resample_around
+from recognition.synthetic import implicit_data_curves, sampling_plane_normals
 
 
 @pytest.mark.parametrize(

@@ -15,18 +15,35 @@ from __future__ import annotations
 import time
 
 import numpy as np
-import scipy.sparse as sp
+from numpy.typing import NDArray
+from scipy.spatial import cKDTree
 
 from recognition.errors import RecognitionError
+from recognition.rigid import pose_matrix, rotation_about
 from recognition.surfaces.data_curves import DataCurves
 from recognition.surfaces.local_geometry import LocalSurfaceGeometry
 from recognition.surfaces.mesh_model import MeshModel
-from recognition.synthetic import local_submesh, plane_section_polyline, resample_around
+from recognition.surfaces.registration.config import ThesisConfig
+from recognition.surfaces.registration.result import (
+    Registration,
+    RegistrationMode,
+    RegistrationStatus,
+    rejected,
+)
+from recognition.surfaces.registration.superposition import (
+    candidate_rows,
+    hypotheses,
+    model_frames,
+)
+from recognition.surfaces.sections import local_submesh, plane_section_polyline, resample_around
 
-__all__ = ["register_thesis", "superposition_error"]
+__all__ = ["correspondence_error", "register_thesis"]
+
+Layout = list[tuple[NDArray[np.float64], float, int]]
+"""Per data curve: its plane normal, mean point spacing and the index of its point nearest p."""
 
 
-def _curve_layout(curves: DataCurves):
+def _curve_layout(curves: DataCurves) -> Layout:
     """Per curve: plane normal, mean spacing, and the index of the point nearest p."""
     layout = []
     for i, c in enumerate(curves.curves):
@@ -36,10 +53,9 @@ def _curve_layout(curves: DataCurves):
     return layout
 
 
-def superposition_error(
-    model: MeshModel,
+def correspondence_error(
     curves: DataCurves,
-    layout,
+    layout: Layout,
     R: np.ndarray,
     t: np.ndarray,
     anchor: np.ndarray,
@@ -74,48 +90,46 @@ def superposition_error(
 
 
 def register_thesis(
-    model: MeshModel, curves: DataCurves, geometry: LocalSurfaceGeometry, config, start
-):
-    """Thesis-mode registration; see the module docstring."""
-    from recognition.surfaces.registration import (
-        Registration,
-        RegistrationMode,
-        RegistrationStatus,
-        _candidates,
-        _hypotheses,
-        _model_frames,
-        _pose_matrix,
-        _rejected,
-        _rot_z,
-    )
+    model: MeshModel,
+    curves: DataCurves,
+    geometry: LocalSurfaceGeometry,
+    config: ThesisConfig = ThesisConfig(),
+) -> Registration:
+    """Thesis-mode registration of the curves on one mesh model (module docstring).
 
+    ``geometry`` is the data's local geometry at p
+    (:func:`~recognition.surfaces.registration.data.data_geometry`).
+    """
+    start = time.perf_counter()
     layout = _curve_layout(curves)
     # faces near enough to hold every section: half a curve's length, with a margin
     extent = max(len(c) for c in curves.curves) * max(s for _, s, _ in layout)
     radius = 0.6 * extent + 2e-3
-    step = np.deg2rad(config.thesis_phi_step_deg)
+    step = np.deg2rad(config.phi_step_deg)
     phis = np.arange(0.0, 2 * np.pi - 1e-9, step)
-    adjacency = _vertex_adjacency(model)
-    from scipy.spatial import cKDTree
-
+    adjacency = model.mesh.vertex_neighbors
     centres = cKDTree(model.mesh.triangles_center)
     local_cache: dict[int, tuple[np.ndarray, np.ndarray]] = {}
     best = None
     candidates_all = []
     evaluations = 0
-    for hyp in _hypotheses(geometry):
-        rows = _candidates(model, hyp, config.delta)[: config.thesis_max_candidates]
-        candidates_all.append(model.table.vertex[rows])
+    for hyp in hypotheses(geometry):
+        rows = candidate_rows(model, hyp, config.delta)[: config.max_candidates]
+        candidates_all.append(model.table.site[rows])
 
-        def pose(vertex, phi, d1, hyp=hyp):
+        def pose(
+            vertex: int, phi: float, d1: np.ndarray, hyp: LocalSurfaceGeometry = hyp
+        ) -> tuple[np.ndarray, np.ndarray]:
             n = model.normals[vertex]
             t1 = d1 - n * (d1 @ n)
             t1 /= np.linalg.norm(t1)
             frame = np.column_stack([t1, np.cross(n, t1), n])
-            R = frame @ _rot_z(np.array(phi)) @ hyp.frame.T
+            R = frame @ rotation_about(2, np.array(phi)) @ hyp.frame.T
             return R, model.vertices[vertex] - R @ hyp.point
 
-        def error_at(vertex, phi, d1):
+        def error_at(
+            vertex: int, phi: float, d1: np.ndarray
+        ) -> tuple[float, np.ndarray, np.ndarray]:
             nonlocal evaluations
             evaluations += 1
             R, t = pose(vertex, phi, d1)
@@ -125,11 +139,11 @@ def register_thesis(
                 faces = np.asarray(centres.query_ball_point(x, radius), dtype=np.int64)
                 local = local_submesh(model.vertices, model.faces, faces)
                 local_cache[vertex] = local
-            return superposition_error(model, curves, layout, R, t, x, local), R, t
+            return correspondence_error(curves, layout, R, t, x, local), R, t
 
-        frames = _model_frames(model, rows)
+        frames = model_frames(model, rows)
         for row, frame in zip(rows, frames, strict=True):
-            v = int(model.table.vertex[row])
+            v = int(model.table.site[row])
             d1 = frame[:, 0]
             scan = [(error_at(v, phi, d1), phi) for phi in phis]
             (e, R, t), phi = min(scan, key=lambda item: item[0][0])
@@ -154,12 +168,12 @@ def register_thesis(
                 best = (e, R, t)
     candidates = np.concatenate(candidates_all) if candidates_all else np.zeros(0, np.int64)
     if best is None:
-        return _rejected(model.name, RegistrationMode.THESIS, start, candidates)
+        return rejected(model.name, RegistrationMode.THESIS, start, candidates)
     e, R, t = best
     return Registration(
         model.name,
         float(e),
-        _pose_matrix(R, t),
+        pose_matrix(R, t),
         R @ geometry.point + t,
         candidates,
         evaluations,
@@ -167,16 +181,3 @@ def register_thesis(
         time.perf_counter() - start,
         RegistrationMode.THESIS,
     )
-
-
-def _vertex_adjacency(model: MeshModel) -> list[np.ndarray]:
-    """1-ring neighbours of every vertex (from the mesh's sparse adjacency matrix)."""
-    cached = getattr(model, "_one_ring", None)
-    if cached is None:
-        f = model.faces
-        e = np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]])
-        A = sp.coo_matrix((np.ones(len(e), bool), (e[:, 0], e[:, 1])), (len(model.vertices),) * 2)
-        A = (A + A.T).tocsr()
-        cached = [A.indices[A.indptr[i] : A.indptr[i + 1]] for i in range(A.shape[0])]
-        model._one_ring = cached
-    return cached
