@@ -168,7 +168,7 @@ def _damped(H: Array, lam: Array, config: LeastSquaresConfig) -> Array:
 def _solve(M: Array, rhs: Array, method: LinearSolve) -> Array:
     """Solutions x of M x = rhs for a batch (B, n, n), (B, n)."""
     if method is LinearSolve.LU:
-        return np.linalg.solve(M, rhs[..., None])[..., 0]
+        return np.asarray(np.linalg.solve(M, rhs[..., None])[..., 0], dtype=np.float64)
     w, V = np.linalg.eigh(M)
     out = np.empty_like(rhs)
     for b in range(len(M)):  # the kept directions differ from problem to problem

@@ -144,9 +144,11 @@ class ModelDatabase:
         table settings so that :meth:`load` can refuse a stale or corrupt file.
         """
         directory = Path(directory)
-        manifest = {"format": DATABASE_FORMAT, "models": {}}
+        models: dict[str, dict] = {}
+        manifest: dict[str, object] = {"format": DATABASE_FORMAT, "models": models}
         for name, model in self.models.items():
             table, df, dense = model.table, model.distance_field, model.candidate_curvatures
+            assert table.d1 is not None and dense.d1 is not None
             file = f"{_safe(name)}.npz"
             arrays = {
                 "vertices": model.vertices,
@@ -166,7 +168,7 @@ class ModelDatabase:
                 "field_values": df.values,
             }
             _write_atomic(directory / file, lambda f, a=arrays: np.savez_compressed(f, **a))
-            manifest["models"][name] = {
+            models[name] = {
                 "file": file,
                 "mesh_hash": model.hash,
                 "config": _config_json(model.config),

@@ -392,8 +392,8 @@ class MeshModel:
         self._table = table
         self._dense = candidate_curvatures
         self._field = distance_field
-        self._distance = None
-        self._tree = None
+        self._distance: MeshDistance | None = None
+        self._tree: cKDTree | None = None
         self._cell_keys: dict[float, np.ndarray] = {}
         self.timings: dict[str, float] = {}
 

@@ -200,7 +200,7 @@ def steepest_descent(
     x = _wrap(surface, np.asarray(x0, float))
     E, grad = superposition_error_gradient(surface, local_points, *x)
     trace = [E]
-    t = 1e-2 / max(np.linalg.norm(grad), 1e-300)
+    t = 1e-2 / max(float(np.linalg.norm(grad)), 1e-300)
     status = LeastSquaresStatus.MAX_ITERATIONS
     it = 0
     for _ in range(max_iterations):
@@ -209,10 +209,12 @@ def steepest_descent(
             status = LeastSquaresStatus.CONVERGED
             trace.append(E)
             break
+
+        def along(step: float, x: Array = x, d: Array = -grad) -> float:
+            return float(superposition_error(surface, local_points, *_wrap(surface, x + step * d)))
+
         t, E_new = _line_minimum(
-            lambda step, x=x, d=-grad: superposition_error(
-                surface, local_points, *_wrap(surface, x + step * d)
-            ),
+            along,
             E,
             t,
         )

@@ -14,7 +14,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from recognition.errors import DegenerateGeometry
 from recognition.rigid import cross, rotation_about, rotation_about_derivative, skew
-from recognition.surfaces.closed_form.surface import ClosedFormSurface, outward_normal
+from recognition.surfaces.closed_form.surface import ClosedFormSurface, _given, outward_normal
 from recognition.surfaces.local_geometry import LocalSurfaceGeometry
 
 __all__ = [
@@ -65,8 +65,7 @@ def model_frame(
     w = cross(d.su, d.sv)
     if not np.linalg.norm(w) > 0 or not np.linalg.norm(d.su) > 0:
         raise DegenerateGeometry(f"{surface.name}: singular parameter point ({u:g}, {v:g})")
-    _, sign = outward_normal(surface, d, w)
-    sign = float(sign[0])
+    sign = float(outward_normal(surface, d, w)[1][0])
     n, n_u, n_v = _normalised(
         sign * w,
         sign * (cross(d.suu, d.sv) + cross(d.su, d.suv)),
@@ -115,7 +114,8 @@ def point_distance_residuals(surface: ClosedFormSurface, points: np.ndarray) -> 
     dr : (n, 3) float
         d r / d point = grad f / |grad f| - f H grad f / |grad f|^3.
     """
-    f, g, H = surface.implicit_terms(points, 2)
+    f, g_, H_ = surface.implicit_terms(points, 2)
+    g, H = _given(g_), _given(H_)
     norm = np.linalg.norm(g, axis=1)
     norm = np.maximum(norm, 1e-300)
     r = f / norm

@@ -37,6 +37,15 @@ __all__ = [
 Array = NDArray[np.float64]
 ImplicitTerms = tuple[Array, Array | None, Array | None]
 """f (n,), grad f (n, 3) and the Hessian of f (n, 3, 3); the orders not asked for are None."""
+Parameter = float | NDArray[np.float64]
+"""A surface parameter u or v: a number or an array of them."""
+
+
+def _given(value: Array | None) -> Array:
+    """A term of :data:`ImplicitTerms` that was asked for."""
+    assert value is not None
+    return value
+
 
 #: Fraction of a non-periodic parameter interval kept clear at each end when a search is
 #: kept inside the domain (the ends may be singular: the poles of a sphere or an ellipsoid).
@@ -110,11 +119,11 @@ class ClosedFormSurface:
 
     def gradient(self, points: ArrayLike) -> Array:
         """grad f at (n, 3) points, (n, 3)."""
-        return self.implicit_terms(np.atleast_2d(np.asarray(points, float)), 1)[1]
+        return _given(self.implicit_terms(np.atleast_2d(np.asarray(points, float)), 1)[1])
 
     def hessian(self, points: ArrayLike) -> Array:
         """Hessian of f at (n, 3) points, (n, 3, 3)."""
-        return self.implicit_terms(np.atleast_2d(np.asarray(points, float)), 2)[2]
+        return _given(self.implicit_terms(np.atleast_2d(np.asarray(points, float)), 2)[2])
 
     def normal(self, u: ArrayLike, v: ArrayLike) -> Array:
         """Outward unit normal (4.10) at sigma(u, v), (..., 3)."""
@@ -125,7 +134,7 @@ class ClosedFormSurface:
         """(k1, k2) at sigma(u, v) from the fundamental forms; see :func:`principal_curvatures`."""
         return principal_curvatures(self, u, v)
 
-    def contain(self, u: ArrayLike, v: ArrayLike) -> tuple[Array, Array]:
+    def contain(self, u: Parameter, v: Parameter) -> tuple[Parameter, Parameter]:
         """(u, v) wrapped into the domain where periodic, clipped to it otherwise."""
         out = []
         for x, (lo, hi), periodic in zip((u, v), self.domain, self.periodic, strict=True):
@@ -153,7 +162,7 @@ class ClosedFormSurface:
         return float(np.linalg.norm(self.symmetric_image(point, estimate) - point))
 
 
-def stack_columns(*columns: ArrayLike) -> Array:
+def stack_columns(*columns: Parameter) -> Array:
     """The columns stacked along a last axis (broadcast together; scalars give a vector)."""
     shapes = {np.shape(c) for c in columns}
     if shapes == {()}:
@@ -167,7 +176,7 @@ def outward_normal(
     surface: ClosedFormSurface, d: SigmaDerivatives, w: np.ndarray
 ) -> tuple[Array, Array]:
     """Unit vector of ``w`` signed to agree with grad f at sigma, and the sign (..., 1)."""
-    g = surface.implicit_terms(d.point.reshape(-1, 3), 1)[1].reshape(d.point.shape)
+    g = surface.gradient(d.point.reshape(-1, 3)).reshape(d.point.shape)
     sign = np.where(np.sum(w * g, axis=-1, keepdims=True) < 0, -1.0, 1.0)
     norm = np.linalg.norm(w, axis=-1, keepdims=True)
     if np.any(norm <= 0):
@@ -224,7 +233,8 @@ def implicit_principal_curvatures(
     -------
     k1, k2 : (n,) float
     """
-    _, g, H = surface.implicit_terms(np.atleast_2d(np.asarray(points, float)), 2)
+    _, g_, H_ = surface.implicit_terms(np.atleast_2d(np.asarray(points, float)), 2)
+    g, H = _given(g_), _given(H_)
     norm = np.linalg.norm(g, axis=1)
     n = g / norm[:, None]
     P = np.eye(3) - n[:, :, None] * n[:, None, :]

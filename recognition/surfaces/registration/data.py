@@ -42,13 +42,14 @@ def common_point(curves: DataCurves) -> np.ndarray:
     close (sampling planes a few degrees apart over a strongly curved surface) is not
     taken for p.
     """
-    best = None
+    best: tuple[float, np.ndarray] | None = None
     for i, c in enumerate(curves.curves):
         others = [_distances_to_polyline(c, o) for j, o in enumerate(curves.curves) if j != i]
         worst = np.max(others, axis=0)
         k = int(np.argmin(worst))
         if best is None or worst[k] < best[0]:
-            best = (worst[k], c[k])
+            best = (float(worst[k]), c[k])
+    assert best is not None
     p = best[1]
     for _ in range(2):
         nearest = []

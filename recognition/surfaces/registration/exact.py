@@ -45,7 +45,7 @@ def refine_exact(
     """
     points = np.asarray(points, float)
     reach = float(np.max(np.linalg.norm(points - points.mean(axis=0), axis=1)))
-    R, t = np.asarray(R, float), np.asarray(t, float)
+    R0, t0 = np.asarray(R, float), np.asarray(t, float)
 
     def evaluate(R: Array, t: Array) -> tuple[Array, ...]:
         X = points @ R.T + t
@@ -74,7 +74,7 @@ def refine_exact(
         return np.linalg.norm(step[:, :3], axis=1) * reach + np.linalg.norm(step[:, 3:], axis=1)
 
     result = damped_least_squares(
-        tuple(a[None] for a in evaluate(R, t)),
+        tuple(a[None] for a in evaluate(R0, t0)),
         cost=cost,
         linearize=linearize,
         retract=retract,
@@ -90,8 +90,8 @@ def refine_exact(
             step_tol=1e-7,
         ),
     )
-    R, t, _, distance, _, _ = (a[0] for a in result.state)
-    return R, t, float(np.mean(distance))
+    R_out, t_out, _, distance, _, _ = (a[0] for a in result.state)
+    return R_out, t_out, float(np.mean(distance))
 
 
 def with_exact_error(
@@ -99,7 +99,7 @@ def with_exact_error(
     model: MeshModel,
     curves: DataCurves,
     refine: bool = False,
-    point: ArrayLike | None = None,
+    point: np.ndarray | None = None,
     iterations: int = 12,
 ) -> Registration:
     """``registration`` with its error computed exactly (if it was not).

@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Sequence
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -52,8 +52,17 @@ from recognition.surfaces.registration.superposition import frames, hypotheses
 __all__ = ["DISTINCT_ANGLE_RAD", "DISTINCT_RADIUS_M", "register_fast"]
 
 Array = NDArray[np.float64]
-Poses = tuple[Array, Array] | tuple[Array, Array, Array] | None
-"""A model's poses (R (k, 3, 3), t (k, 3)[, RMS residual (k,)]), or None (no candidate)."""
+
+
+@dataclass(frozen=True)
+class _Poses:
+    """A model's poses at one stage of the search: R (k, 3, 3), t (k, 3), and their RMS
+    residual (k,) once refined."""
+
+    R: Array
+    t: Array
+    rms: Array | None = None
+
 
 #: Poses closer than this (p's image, metres) and ...
 DISTINCT_RADIUS_M = 0.5e-3
@@ -147,7 +156,7 @@ def _dense_candidates(
 
 
 def _arm_indices(
-    curves: DataCurves, point: np.ndarray, fractions: Sequence[float]
+    curves: DataCurves, point: np.ndarray, fractions: Sequence[float] | np.ndarray
 ) -> NDArray[np.int64]:
     """Indices into ``curves.points`` of the points at ``fractions`` of each arm's length.
 
@@ -208,19 +217,20 @@ def _screen(
     config: FastConfig,
     search: FastSearchConfig,
     log: Array,
-) -> list[tuple[Array | None, Array | None, NDArray[np.int64]]]:
+) -> list[tuple[_Poses | None, NDArray[np.int64]]]:
     """Stage 1: candidate poses of every model, scored on the screening points.
 
     Every pose is first scored on the prescreening points; the best ``prescreen_keep``
     of them (at least ``n_screened``) are scored again on the screening points. Returns,
-    per model, the best ``n_screened`` poses (R, t) and the candidate vertices.
+    per model, the best ``n_screened`` poses (None without candidates) and the candidate
+    vertices.
     """
     points = curves.points[_arm_indices(curves, geometry.point, search.arm_fractions)]
     pre_points = curves.points[_arm_indices(curves, geometry.point, search.prescreen_fractions)]
-    best_R = [[] for _ in models]
-    best_t = [[] for _ in models]
-    best_s = [[] for _ in models]
-    candidates = [[] for _ in models]
+    best_R: list[list[Array]] = [[] for _ in models]
+    best_t: list[list[Array]] = [[] for _ in models]
+    best_s: list[list[Array]] = [[] for _ in models]
+    candidates: list[list[NDArray[np.int64]]] = [[] for _ in models]
     half = np.arange(
         -search.aligned_window_rad, search.aligned_window_rad + 1e-9, search.aligned_step_rad
     )
@@ -248,6 +258,7 @@ def _screen(
                 if not mask.any():
                     continue
                 v = pool.site[rows[mask]]
+                assert pool.d1 is not None  # the candidate map carries principal directions
                 F = frames(model.normals[v], pool.d1[rows[mask]])
                 turns = rotation_about(2, phis)
                 patterns = np.einsum("fij,pj->fpi", turns, local)  # (F, P, 3)
@@ -268,15 +279,15 @@ def _screen(
                 best_t[w].append(origins[c] - R @ hyp.point)
                 best_s[w].append(score)
             log[w] += time.perf_counter() - start
-    out = []
+    out: list[tuple[_Poses | None, NDArray[np.int64]]] = []
     for w in range(len(models)):
         cands = np.concatenate(candidates[w]) if candidates[w] else np.zeros(0, np.int64)
         if not best_R[w]:
-            out.append((None, None, cands))
+            out.append((None, cands))
             continue
         R, t, s = (np.concatenate(x) for x in (best_R[w], best_t[w], best_s[w]))
         keep = np.argsort(s, kind="stable")[: search.n_screened]
-        out.append((R[keep], t[keep], cands))
+        out.append((_Poses(R[keep], t[keep]), cands))
     return out
 
 
@@ -302,51 +313,51 @@ def _search(
     coarse_idx = np.unique(_arm_indices(curves, geometry.point, fractions))
     screened = _screen(models, stack, which_field, curves, geometry, config, search, seconds)
 
-    def batched(poses: list[Poses], stage_points: Array, steps: int) -> list[Poses]:
+    def batched(poses: list[_Poses | None], stage_points: Array, steps: int) -> list[_Poses | None]:
         """Gauss-Newton of every model's poses in one batch; time shared by pose count."""
-        live = [w for w in range(n) if poses[w] is not None]
+        live = [(w, p) for w, p in enumerate(poses) if p is not None]
         if not live:
             return poses
         start = time.perf_counter()
-        owner = np.concatenate([np.full(len(poses[w][0]), w) for w in live])
+        owner = np.concatenate([np.full(len(p.R), w) for w, p in live])
         R, t, rms, trace = _gauss_newton(
             stack,
             which_field[owner],
             stage_points,
-            np.concatenate([poses[w][0] for w in live]),
-            np.concatenate([poses[w][1] for w in live]),
+            np.concatenate([p.R for _, p in live]),
+            np.concatenate([p.t for _, p in live]),
             steps,
         )
         counts = np.bincount(owner, minlength=n)
         seconds[:] += (time.perf_counter() - start) * counts / counts.sum()
-        iterations[live] += len(trace) - 1
+        iterations[[w for w, _ in live]] += len(trace) - 1
         out = list(poses)
-        for w in live:
+        for w, _ in live:
             sel = owner == w
-            out[w] = (R[sel], t[sel], rms[sel])
+            out[w] = _Poses(R[sel], t[sel], rms[sel])
         return out
 
-    def distinct(poses: list[Poses], n_keep: int) -> list[Poses]:
-        out = []
+    def distinct(poses: list[_Poses | None], n_keep: int) -> list[_Poses | None]:
+        out: list[_Poses | None] = []
         for w, p in enumerate(poses):
             if p is None:
                 out.append(None)
                 continue
+            assert p.rms is not None  # refined poses
             start = time.perf_counter()
-            keep = _distinct(*p, geometry.point, n_keep)
-            out.append((p[0][keep], p[1][keep]))
+            keep = _distinct(p.R, p.t, p.rms, geometry.point, n_keep)
+            out.append(_Poses(p.R[keep], p.t[keep]))
             seconds[w] += time.perf_counter() - start
         return out
 
-    poses = [None if R is None else (R, t) for R, t, _ in screened]
-    poses = batched(poses, points[screen_idx], search.screen_iterations)
+    poses = batched([p for p, _ in screened], points[screen_idx], search.screen_iterations)
     poses = batched(distinct(poses, search.n_coarse), points[coarse_idx], search.coarse_iterations)
     status = [RegistrationStatus.CONVERGED] * n
-    live = [w for w in range(n) if poses[w] is not None]
-    if config.prune_ratio is not None and live:
-        best = min(float(poses[w][2].min()) for w in live)
-        for w in live:
-            if float(poses[w][2].min()) > config.prune_ratio * best:
+    coarse_rms = {w: float(p.rms.min()) for w, p in enumerate(poses) if p and p.rms is not None}
+    if config.prune_ratio is not None and coarse_rms:
+        best = min(coarse_rms.values())
+        for w, value in coarse_rms.items():
+            if value > config.prune_ratio * best:
                 status[w] = RegistrationStatus.PRUNED
     final = [
         p if s is RegistrationStatus.CONVERGED else None for p, s in zip(poses, status, strict=True)
@@ -354,14 +365,14 @@ def _search(
     final = batched(distinct(final, search.n_final), points, search.final_iterations)
     out = []
     for w, model in enumerate(models):
-        candidates = screened[w][2]
+        candidates = screened[w][1]
         source = final[w] if final[w] is not None else poses[w]
-        if source is None:
+        if source is None or source.rms is None:
             out.append(rejected(model.name, RegistrationMode.FAST, 0.0, candidates, seconds[w]))
             continue
         start = time.perf_counter()
-        b = int(np.argmin(source[2]))
-        R, t = source[0][b], source[1][b]
+        b = int(np.argmin(source.rms))
+        R, t = source.R[b], source.t[b]
         error = float(_field_errors(stack, which_field[[w]], points, R[None], t[None])[0])
         out.append(
             Registration(
@@ -477,7 +488,7 @@ def _polish(
     exact_errors = [r.error_m for r in registrations if r.error_is_exact]
     best = min(field_errors + exact_errors, default=float("inf"))
     if not np.isfinite(best):
-        return registrations
+        return list(registrations)
     limit = config.polish_ratio * best + config.polish_margin_m
     out = list(registrations)
     for w, reg in enumerate(registrations):

@@ -55,7 +55,7 @@ def register_icp(
             continue
         R, t = superposition_poses(model, rows, hyp, phis)
         for Rs, ts in zip(R.reshape(-1, 3, 3), t.reshape(-1, 3), strict=True):
-            trace = []
+            trace: list[float] = []
             for _ in range(config.iterations):
                 X = points @ Rs.T + ts
                 _, nearest = model.tree.query(X)
@@ -79,7 +79,7 @@ def register_icp(
     candidates = np.concatenate(all_rows) if all_rows else np.zeros(0, np.int64)
     if best is None:
         return rejected(model.name, RegistrationMode.ICP, start, candidates)
-    _, R, t, trace = best
+    _, R, t, best_trace = best
     error = float(np.mean(model.distance.closest(points @ R.T + t)[0]))
     return Registration(
         model.name,
@@ -91,5 +91,5 @@ def register_icp(
         RegistrationStatus.CONVERGED,
         time.perf_counter() - start,
         RegistrationMode.ICP,
-        trace,
+        best_trace,
     )
