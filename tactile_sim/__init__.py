@@ -12,7 +12,11 @@ from tactile_sim.errors import (
     PortInUse,
     RecordingError,
     SimulationError,
+    SimulationUnstable,
+    SweepTruncated,
     UnknownObject,
+    UnreachablePoint,
+    WorkspaceLimit,
 )
 
 __all__ = [
@@ -22,5 +26,9 @@ __all__ = [
     "PortInUse",
     "RecordingError",
     "SimulationError",
+    "SimulationUnstable",
+    "SweepTruncated",
     "UnknownObject",
+    "UnreachablePoint",
+    "WorkspaceLimit",
 ]

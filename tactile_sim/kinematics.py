@@ -10,7 +10,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from tactile_sim.errors import SimulationError
+from tactile_sim.errors import UnreachablePoint, WorkspaceLimit
 
 __all__ = [
     "COBRA600",
@@ -27,36 +27,6 @@ __all__ = [
     "probe_tip_position",
     "reach_radii",
 ]
-
-
-class WorkspaceLimit(enum.Enum):
-    """The limit a point or joint vector breaks."""
-
-    RADIUS_TOO_LARGE = "radius_too_large"
-    RADIUS_TOO_SMALL = "radius_too_small"
-    SHOULDER = "shoulder"
-    ELBOW = "elbow"
-    QUILL = "quill"
-    ROLL = "roll"
-
-
-class UnreachablePoint(SimulationError, ValueError):
-    """A tip pose outside the robot's workspace; ``limit`` names the limit it breaks.
-
-    Parameters
-    ----------
-    message : str
-        What was asked, what limit it breaks and what the limit is.
-    limit : WorkspaceLimit
-        The limit broken (for the preferred branch when no elbow branch works).
-    """
-
-    def __init__(self, message: str, limit: WorkspaceLimit) -> None:
-        super().__init__(message)
-        self.limit = limit
-
-    def __reduce__(self) -> tuple[type[UnreachablePoint], tuple[str, WorkspaceLimit]]:
-        return type(self), (str(self), self.limit)
 
 
 class ElbowBranch(enum.Enum):

@@ -60,13 +60,8 @@ from tactile_sim.collision import (
     object_parts,
     solid_names,
 )
-from tactile_sim.errors import SimulationError, UnknownObject
-from tactile_sim.kinematics import (
-    COBRA600,
-    UnreachablePoint,
-    inverse_kinematics,
-    probe_tip_position,
-)
+from tactile_sim.errors import SimulationError, SweepTruncated, UnknownObject, UnreachablePoint
+from tactile_sim.kinematics import COBRA600, inverse_kinematics, probe_tip_position
 from tactile_sim.objects import ObjectModel, load_object, object_names
 from tactile_sim.sensor import (
     ContactEstimate,
@@ -216,10 +211,6 @@ class PlacementConfig:
 
 _MIN_CURVE_POINTS = 5
 """Fewest points a data curve may have (``recognition.DataCurves`` asks for five)."""
-
-
-class SweepTruncated(SimulationError, RuntimeError):
-    """A sweep lost so many points (edges, steep surfaces) that no data curve is left."""
 
 
 class StopReason(enum.Enum):
@@ -789,10 +780,6 @@ def choose_point(
 # The controller ----------------------------------------------------------------------------
 
 
-class _NoContact(Exception):
-    """The approach ran its full travel without touching anything."""
-
-
 class _Rig:
     """Drives the arm through joint-space moves and guarded approaches; reads the sensor."""
 
@@ -946,18 +933,14 @@ class _Rig:
 
     def approach(
         self, start: NDArray[np.float64], direction: NDArray[np.float64], travel: float
-    ) -> ContactEstimate:
-        """Guarded approach from ``start`` along ``direction``; returns the sensed contact.
+    ) -> ContactEstimate | None:
+        """Guarded approach from ``start`` along ``direction``; returns the sensed contact,
+        or None when nothing was touched within ``travel`` metres.
 
         Two phases: at ``approach_speed_m_s`` until the first touch, then, from where the
         arm stopped, a press at ``press_speed_m_s`` until the deflection or the axial
         force reaches its set point (steadily, not in an impact spike). The arm holds
         there, the stylus settles for ``dwell_s``, the sensors are read.
-
-        Raises
-        ------
-        _NoContact
-            Nothing touched within ``travel``.
         """
         config = self.config
         touched = self._guarded_line(
@@ -970,7 +953,7 @@ class _Rig:
             lead=False,
         )
         if touched is None:
-            raise _NoContact
+            return None
         # Back off from the impact (the arm overshoots the touch point), then press slowly.
         touch_tip = self.commanded_tip()
         here = touch_tip - config.backoff_m * direction
@@ -1088,14 +1071,13 @@ class _SweepRunner:
         else:
             self.rig.teleport(start)
             self.rig.settle(self.config.settle_s)
-        try:
-            estimate = self.rig.approach(start, -plane.up_in_world, clearance + search)
-        except _NoContact as error:
+        estimate = self.rig.approach(start, -plane.up_in_world, clearance + search)
+        if estimate is None:
             raise SimulationError(
                 f"no surface found within {(clearance + search) * 1e3:.1f} mm of the planned "
                 f"point {np.round(plane.origin_in_world, 4).tolist()} m (the tip centre was "
                 f"to touch at {np.round(line_point, 4).tolist()} m)"
-            ) from error
+            )
         return self._sample(estimate)
 
     def side(
@@ -1134,7 +1116,11 @@ class _SweepRunner:
                 rig.move(start, config.move_speed_m_s)
                 rig.settle(config.settle_s)
                 estimate = rig.approach(start, -predicted_up, config.standoff_m + config.search_m)
-            except _NoContact:
+            except UnreachablePoint as error:
+                return samples, SweepSide(
+                    direction, count, len(samples), StopReason.UNREACHABLE, str(error)
+                )
+            if estimate is None:
                 return samples, SweepSide(
                     direction,
                     count,
@@ -1143,10 +1129,6 @@ class _SweepRunner:
                     f"lost contact after {len(samples)} of {count} points on the "
                     f"{'+' if direction > 0 else '-'} side: no surface within "
                     f"{config.search_m * 1e3:.1f} mm beyond the predicted point (an edge)",
-                )
-            except UnreachablePoint as error:
-                return samples, SweepSide(
-                    direction, count, len(samples), StopReason.UNREACHABLE, str(error)
                 )
             sample = self._sample(estimate)
             new_up = _in_plane(estimate.normal_in_world, plane)

@@ -6,13 +6,11 @@ import numpy as np
 import pytest
 
 from tactile_sim import scene
-from tactile_sim.errors import SimulationError
+from tactile_sim.errors import SimulationError, UnreachablePoint, WorkspaceLimit
 from tactile_sim.kinematics import (
     COBRA600,
     Cobra600Geometry,
     ElbowBranch,
-    UnreachablePoint,
-    WorkspaceLimit,
     flange_pose,
     inverse_kinematics,
     joint_limit_violation,

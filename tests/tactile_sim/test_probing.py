@@ -12,7 +12,7 @@ from recognition.surfaces import DataCurves
 from tactile_sim import probing
 from tactile_sim.collision import load_solid
 from tactile_sim.errors import SimulationError, UnknownObject
-from tactile_sim.kinematics import UnreachablePoint, WorkspaceLimit
+from tactile_sim.errors import UnreachablePoint, WorkspaceLimit
 from tactile_sim.probing import StopReason
 
 
