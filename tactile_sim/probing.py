@@ -65,11 +65,11 @@ from tactile_sim.kinematics import COBRA600, inverse_kinematics, probe_tip_posit
 from tactile_sim.objects import ObjectModel, load_object, object_names
 from tactile_sim.sensor import (
     ContactEstimate,
+    GroundTruthReader,
     SensorConfig,
     SensorReader,
     SensorReading,
     estimate_contact,
-    ground_truth_contact,
     sweep_contacts,
 )
 from tactile_sim.trajectory import Trajectory, TrajectoryRecorder
@@ -1047,9 +1047,10 @@ class _SweepRunner:
         self.spacing = spacing_m
         self.max_tilt = None if max_tilt_deg is None else math.radians(max_tilt_deg)
         self.highest_z = -math.inf
+        self.truth = GroundTruthReader(rig.physics)
 
     def _sample(self, estimate: ContactEstimate) -> _Sample:
-        truth = ground_truth_contact(self.rig.physics)
+        truth = self.truth.read()
         self.highest_z = max(self.highest_z, float(estimate.tip_centre_in_world[2]))
         slide = estimate.tip_centre_in_world - self.rig.last_touch_centre
         return _Sample(estimate, slide, truth.tip_centre_in_world, truth.stylus_contacts)

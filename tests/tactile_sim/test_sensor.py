@@ -12,6 +12,7 @@ from tactile_sim import probing, scene
 from tactile_sim.kinematics import probe_tip_position
 from tactile_sim.sensor import (
     NoiseModel,
+    GroundTruthReader,
     SensorConfig,
     SensorReader,
     SensorReading,
@@ -126,6 +127,18 @@ def test_readings_are_seeded_and_noise_has_the_documented_magnitude():
     exact = SensorReader(physics, NoiseModel.noiseless(), np.random.default_rng(7)).raw()
     np.testing.assert_allclose(samples.std(axis=0), noise.sigmas, rtol=0.06)
     assert np.all(np.abs(samples.mean(axis=0) - exact) < 4.0 * noise.sigmas / math.sqrt(5000))
+
+
+def test_ground_truth_reader_reads_the_scene_it_was_made_for():
+    scenes = [scene.load_scene(), scene.load_scene()]
+    scene.set_arm_joints(scenes[1], [0.3, 1.0, 0.05, 0.0])
+    readers = [GroundTruthReader(physics) for physics in scenes]
+    for physics, reader in zip(scenes, readers, strict=True):
+        truth = reader.read()
+        expected = probe_tip_position(scene.arm_joints(physics))
+        np.testing.assert_allclose(truth.tip_centre_in_world, expected, atol=1e-6)
+        assert truth.stylus_contacts == 0 and len(truth.contact_points_in_world) == 0
+        assert ground_truth_contact(physics).stylus_contacts == truth.stylus_contacts
 
 
 def test_noise_model_rejects_negative_sigmas():
