@@ -50,7 +50,8 @@ import numpy as np
 import trimesh
 from numpy.typing import ArrayLike, NDArray
 
-from recognition.surfaces import DataCurves
+from recognition import DataCurves
+from recognition.rigid import pose_matrix, rotation_about
 from tactile_sim import scene
 from tactile_sim.collision import (
     ConvexParts,
@@ -526,11 +527,8 @@ def random_pose(
     yaw = rng.uniform(*config.yaw_range_rad)
     radius = config.max_offset_m * math.sqrt(rng.uniform())
     angle = rng.uniform(-math.pi, math.pi)
-    T = np.eye(4)
-    c, s = math.cos(yaw), math.sin(yaw)
-    T[:2, :2] = [[c, -s], [s, c]]
-    T[:3, 3] = _MOUNT_IN_WORLD + np.array([radius * math.cos(angle), radius * math.sin(angle), 0.0])
-    return T
+    offset = np.array([radius * math.cos(angle), radius * math.sin(angle), 0.0])
+    return pose_matrix(rotation_about(2, yaw), _MOUNT_IN_WORLD + offset)
 
 
 _MOUNT_IN_WORLD = np.array([0.40, 0.0, 0.0])

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from recognition.rigid import rotation_about
 from tactile_sim.objects.recipe import (
     Ellipsoid,
     HalfSpace,
@@ -52,11 +53,7 @@ _TINY = 1e-12
 def rotation_matrix(rotation_deg: tuple[float, float, float]) -> np.ndarray:
     """(3, 3) rotation ``Rz @ Ry @ Rx`` from extrinsic x, y, z angles in degrees."""
     ax, ay, az = np.radians(rotation_deg)
-    cx, sx, cy, sy, cz, sz = np.cos(ax), np.sin(ax), np.cos(ay), np.sin(ay), np.cos(az), np.sin(az)
-    Rx = np.array([[1, 0, 0], [0, cx, -sx], [0, sx, cx]])
-    Ry = np.array([[cy, 0, sy], [0, 1, 0], [-sy, 0, cy]])
-    Rz = np.array([[cz, -sz, 0], [sz, cz, 0], [0, 0, 1]])
-    return Rz @ Ry @ Rx
+    return rotation_about(2, az) @ rotation_about(1, ay) @ rotation_about(0, ax)
 
 
 def _to_local(xyz: np.ndarray, center, rotation_deg) -> np.ndarray:

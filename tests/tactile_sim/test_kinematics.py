@@ -5,6 +5,7 @@ import math
 import numpy as np
 import pytest
 
+from recognition.rigid import rotation_about
 from tactile_sim import scene
 from tactile_sim.errors import SimulationError, UnreachablePoint, WorkspaceLimit
 from tactile_sim.kinematics import (
@@ -192,3 +193,22 @@ def test_bad_input_shapes_raise_value_error():
         inverse_kinematics([0.4, 0.0])
     with pytest.raises(ValueError, match="deflection"):
         probe_tip_pose([0.0, 0.0, 0.0, 0.0], deflection=[0.1])
+
+
+def test_rotations_are_bit_identical_to_the_explicit_matrices():
+    rng = np.random.default_rng(3)
+    angles = rng.uniform(-7.0, 7.0, 2000)
+    c, s, zero, one = np.cos(angles), np.sin(angles), np.zeros(2000), np.ones(2000)
+    explicit = {
+        0: [[one, zero, zero], [zero, c, -s], [zero, s, c]],
+        1: [[c, zero, s], [zero, one, zero], [-s, zero, c]],
+        2: [[c, -s, zero], [s, c, zero], [zero, zero, one]],
+    }
+    for axis, rows in explicit.items():
+        assert np.array_equal(rotation_about(axis, angles), np.moveaxis(np.array(rows), -1, 0))
+    # The flange: a turn by the yaw about z, then half a turn about x.
+    joints = np.column_stack([angles, rng.uniform(-2.5, 2.5, 2000), np.zeros(2000), zero])
+    yaw = joints[:, 0] + joints[:, 1]
+    cy, sy = np.cos(yaw), np.sin(yaw)
+    flange = np.moveaxis(np.array([[cy, sy, zero], [sy, -cy, zero], [zero, zero, -one]]), -1, 0)
+    assert np.array_equal(flange_pose(joints)[:, :3, :3], flange)

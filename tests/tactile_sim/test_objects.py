@@ -36,7 +36,7 @@ from tactile_sim.objects.recipe import (
     recipe_from_dict,
     recipe_to_dict,
 )
-from tactile_sim.objects.sdf import blend_margin, evaluate, sd_round_cones
+from tactile_sim.objects.sdf import blend_margin, evaluate, rotation_matrix, sd_round_cones
 
 #: Thesis Table 4.4: model -> (vertices, dimensions in mm as printed, largest first).
 TABLE_4_4 = {
@@ -244,6 +244,41 @@ def test_half_space_and_culling_keep_sign():
     assert np.array_equal(np.sign(exact), np.sign(culled))
     near = np.abs(exact) < 3.0
     np.testing.assert_allclose(culled[near], exact[near], atol=1e-9)
+
+
+def recipe_rotations() -> list[tuple[float, float, float]]:
+    """Every ``rotation_deg`` of the catalog's recipes."""
+    found = []
+
+    def walk(value: object) -> None:
+        if isinstance(value, dict):
+            if "rotation_deg" in value:
+                found.append(tuple(value["rotation_deg"]))
+            for child in value.values():
+                walk(child)
+        elif isinstance(value, list):
+            for child in value:
+                walk(child)
+
+    for name in object_names():
+        walk(recipe_to_dict(load_object_recipe(name)))
+    return found
+
+
+def test_rotation_matrix_is_bit_identical_to_the_explicit_product():
+    # Meshes are cached by recipe hash: a change in the last bit of a primitive's frame
+    # would differ silently from the cached meshes.
+    rng = np.random.default_rng(0)
+    rotations = [*recipe_rotations(), *map(tuple, rng.uniform(-180.0, 180.0, (500, 3)))]
+    assert len(rotations) > 500
+    for rotation_deg in rotations:
+        ax, ay, az = np.radians(rotation_deg)
+        cx, sx, cy, sy = np.cos(ax), np.sin(ax), np.cos(ay), np.sin(ay)
+        cz, sz = np.cos(az), np.sin(az)
+        Rx = np.array([[1, 0, 0], [0, cx, -sx], [0, sx, cx]])
+        Ry = np.array([[cy, 0, sy], [0, 1, 0], [-sy, 0, cy]])
+        Rz = np.array([[cz, -sz, 0], [sz, cz, 0], [0, 0, 1]])
+        assert np.array_equal(rotation_matrix(rotation_deg), Rz @ Ry @ Rx)
 
 
 # --- meshing ----------------------------------------------------------------------------

@@ -11,8 +11,7 @@ import trimesh
 from recognition.surfaces import DataCurves
 from tactile_sim import probing
 from tactile_sim.collision import load_solid
-from tactile_sim.errors import SimulationError, UnknownObject
-from tactile_sim.errors import UnreachablePoint, WorkspaceLimit
+from tactile_sim.errors import SimulationError, UnknownObject, UnreachablePoint, WorkspaceLimit
 from tactile_sim.probing import StopReason
 
 
@@ -47,6 +46,14 @@ def test_random_pose_is_upright_and_near_the_mount():
         np.testing.assert_allclose(T[:3, 2], [0.0, 0.0, 1.0], atol=1e-12)
         assert T[2, 3] == 0.0
         assert np.hypot(T[0, 3] - 0.40, T[1, 3]) <= 0.02 + 1e-12
+
+
+def test_random_pose_turns_by_the_drawn_yaw_exactly():
+    for seed in range(50):
+        T = probing.random_pose(np.random.default_rng(seed))
+        yaw = np.random.default_rng(seed).uniform(-math.pi, math.pi)
+        c, s = math.cos(yaw), math.sin(yaw)
+        assert np.array_equal(T[:3, :3], [[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
 
 
 def test_session_on_the_sphere(sphere_scene):

@@ -11,8 +11,8 @@ import trimesh
 from tactile_sim import probing, scene
 from tactile_sim.kinematics import probe_tip_position
 from tactile_sim.sensor import (
-    NoiseModel,
     GroundTruthReader,
+    NoiseModel,
     SensorConfig,
     SensorReader,
     SensorReading,
