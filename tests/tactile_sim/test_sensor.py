@@ -10,6 +10,7 @@ import trimesh
 
 from tactile_sim import probing, scene
 from tactile_sim.kinematics import probe_tip_position
+from tactile_sim.probing.rig import Rig
 from tactile_sim.sensor import (
     GroundTruthReader,
     NoiseModel,
@@ -47,7 +48,7 @@ def press_on(probe_scene, normal, sensor=NOISELESS, frictionless=False):
     if frictionless:
         tip = probe_scene.physics.model.name2id(scene.PROBE_TIP_GEOM, "geom")
         probe_scene.physics.model.geom_friction[tip, 0] = 0.0
-    rig = probing._Rig(probe_scene, probing.ProbingConfig(), sensor, np.random.default_rng(0))
+    rig = Rig(probe_scene, probing.ProbingConfig(), sensor, np.random.default_rng(0))
     T = probe_scene.T_world_from_object
     top_point = T[:3, :3] @ [0.0, 0.0, 0.02] + T[:3, 3]
     start = top_point + (0.001 + 0.0006) * normal
