@@ -16,6 +16,7 @@ from tactile_sim.collision import (
     closed_spline_coefficients,
     convex_decomposition,
     convex_hull_part,
+    decomposition,
     decomposition_key,
     hull_surface_deviation,
     load_solid,
@@ -193,7 +194,7 @@ def test_catalog_hulls_are_shipped_so_a_warm_start_never_runs_coacd(name, monkey
     def forbidden(*args, **kwargs):
         raise AssertionError("CoACD ran on a warm start")
 
-    monkeypatch.setattr(collision, "_run_coacd", forbidden)
+    monkeypatch.setattr(decomposition, "_run_coacd", forbidden)
     parts = object_parts(load_object(name), progress=False)
     assert isinstance(parts, ConvexParts)
     assert parts.source in ("shipped", "convex"), (
