@@ -5,7 +5,6 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -13,6 +12,7 @@ from numpy.typing import ArrayLike, NDArray
 from recognition.rigid import apply_pose
 from tactile_sim.errors import SimulationError
 from tactile_sim.probing.config import ProbingConfig
+from tactile_sim.probing.placement import ObjectLike
 from tactile_sim.probing.plan import SamplingPlane
 from tactile_sim.probing.probe_scene import ProbeScene, build_probe_scene
 from tactile_sim.probing.rig import Rig
@@ -58,7 +58,7 @@ class ContourTrace:
 
 
 def trace_contour(
-    obj: Any,
+    obj: ObjectLike,
     *,
     seed: int,
     n_points: int = 40,

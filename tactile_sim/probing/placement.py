@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 import trimesh
@@ -29,12 +28,17 @@ from tactile_sim.objects import ObjectModel, load_object, object_names
 
 __all__ = [
     "MOUNT_IN_WORLD",
+    "ObjectLike",
     "PlacementConfig",
     "ProbeTarget",
     "random_pose",
     "resolve_object",
 ]
 
+
+ObjectLike = str | ObjectModel | Solid | trimesh.Trimesh
+"""What can be probed: a catalog or solid name, a catalog object, a solid, or a mesh in
+metres (model frame, base on z = 0)."""
 
 MOUNT_IN_WORLD = np.array([0.40, 0.0, 0.0])
 """The scene's ``object_mount`` site (``scenes/scene.xml``), axes parallel to the world's."""
@@ -58,7 +62,7 @@ class ProbeTarget:
     parts: ConvexParts
 
 
-def resolve_object(obj: Any, *, progress: bool = True) -> ProbeTarget:
+def resolve_object(obj: ObjectLike, *, progress: bool = True) -> ProbeTarget:
     """Returns the name, mesh and collision parts of a catalog name, solid name,
     ObjectModel, Solid or trimesh mesh.
 

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import mujoco
 import numpy as np
@@ -16,7 +16,16 @@ from numpy.typing import ArrayLike, NDArray
 
 from recognition.rigid import apply_pose
 from tactile_sim import scene
-from tactile_sim.probing.placement import MOUNT_IN_WORLD, ProbeTarget, random_pose, resolve_object
+from tactile_sim.probing.placement import (
+    MOUNT_IN_WORLD,
+    ObjectLike,
+    ProbeTarget,
+    random_pose,
+    resolve_object,
+)
+
+if TYPE_CHECKING:
+    from dm_control import mjcf
 
 __all__ = [
     "ProbeScene",
@@ -37,7 +46,7 @@ class ProbeScene:
     build_seconds : float, seconds
     """
 
-    physics: Any
+    physics: mjcf.Physics
     target: ProbeTarget
     T_world_from_object: NDArray[np.float64]
     build_seconds: float
@@ -105,7 +114,11 @@ class ProbeScene:
 
 
 def build_probe_scene(
-    obj: Any, T_world_from_object: ArrayLike | None = None, *, seed: int = 0, progress=True
+    obj: ObjectLike,
+    T_world_from_object: ArrayLike | None = None,
+    *,
+    seed: int = 0,
+    progress: bool = True,
 ) -> ProbeScene:
     """Returns the compiled probing scene with an object placed on the table.
 

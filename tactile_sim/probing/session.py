@@ -14,7 +14,6 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -23,6 +22,7 @@ from recognition import DataCurves
 from tactile_sim.errors import SweepTruncated
 from tactile_sim.kinematics import inverse_kinematics
 from tactile_sim.probing.config import ProbingConfig
+from tactile_sim.probing.placement import ObjectLike
 from tactile_sim.probing.plan import choose_point, sampling_planes, snap_point
 from tactile_sim.probing.probe_scene import ProbeScene, build_probe_scene
 from tactile_sim.probing.rig import Rig
@@ -130,7 +130,7 @@ class ProbeSession:
 
 
 def probe_object(
-    obj: Any,
+    obj: ObjectLike,
     *,
     seed: int,
     point: ArrayLike | None = None,

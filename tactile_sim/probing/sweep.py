@@ -147,13 +147,15 @@ def _in_plane(vector: NDArray[np.float64], plane: SamplingPlane) -> NDArray[np.f
     return None if norm < 1e-6 else projected / norm
 
 
-def _rotate_in_plane(vector, plane: SamplingPlane, angle: float) -> NDArray[np.float64]:
+def _rotate_in_plane(
+    vector: NDArray[np.float64], plane: SamplingPlane, angle: float
+) -> NDArray[np.float64]:
     """Rotates an in-plane vector about the plane normal by ``angle`` radians."""
     n = plane.normal_in_world
     return vector * math.cos(angle) + np.cross(n, vector) * math.sin(angle)
 
 
-def _signed_angle(a, b, plane: SamplingPlane) -> float:
+def _signed_angle(a: NDArray[np.float64], b: NDArray[np.float64], plane: SamplingPlane) -> float:
     """Signed angle from in-plane vector a to b about the plane normal."""
     return math.atan2(float(np.cross(a, b) @ plane.normal_in_world), float(a @ b))
 
@@ -173,7 +175,9 @@ class SweepRunner:
         direction; None: no limit (outline traces).
     """
 
-    def __init__(self, rig: Rig, config: ProbingConfig, spacing_m: float, max_tilt_deg):
+    def __init__(
+        self, rig: Rig, config: ProbingConfig, spacing_m: float, max_tilt_deg: float | None
+    ) -> None:
         self.rig = rig
         self.config = config
         self.spacing = spacing_m
