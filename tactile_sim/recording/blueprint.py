@@ -2,10 +2,10 @@
 
 from __future__ import annotations
 
-from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 if TYPE_CHECKING:
     import rerun.blueprint as rrb
@@ -15,7 +15,7 @@ __all__ = [
 ]
 
 
-def probe_blueprint(target_in_world: Sequence[float] | None = None) -> rrb.Blueprint:
+def probe_blueprint(target_in_world: ArrayLike | None = None) -> rrb.Blueprint:
     """Returns the recording's first view: the 3D scene, the stylus signals, the log, and
     the recognition (models with candidates, ranking).
 

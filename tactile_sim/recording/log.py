@@ -11,11 +11,10 @@ and ``sim_time``.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from recognition.rigid import apply_pose
 
@@ -67,7 +66,7 @@ def _xyzw(quat_wxyz: NDArray[np.float64]) -> NDArray[np.float64]:
     return np.concatenate([quat_wxyz[..., 1:], quat_wxyz[..., :1]], axis=-1)
 
 
-def _rgba8(rgba: Sequence[float]) -> NDArray[np.uint8]:
+def _rgba8(rgba: ArrayLike) -> NDArray[np.uint8]:
     """Colour in [0, 1] as 8-bit RGBA."""
     return np.clip(np.round(np.asarray(rgba) * 255.0), 0, 255).astype(np.uint8)
 
