@@ -2,7 +2,11 @@
 
 Importing the package loads neither MuJoCo nor dm_control; the submodules that need
 them import them. :mod:`tactile_sim.objects` holds the catalog of the thesis's ten
-free-form objects.
+free-form objects, :mod:`tactile_sim.collision` their convex collision parts and the
+closed-form solids; :mod:`tactile_sim.scene`, :mod:`tactile_sim.kinematics` and
+:mod:`tactile_sim.sensor` the robot, its probe and what the probe measures;
+:mod:`tactile_sim.probing` the probing sessions, :mod:`tactile_sim.recording` their rerun
+recordings. Every exception is in :mod:`tactile_sim.errors`.
 """
 
 from tactile_sim.errors import (
@@ -12,7 +16,11 @@ from tactile_sim.errors import (
     PortInUse,
     RecordingError,
     SimulationError,
+    SimulationUnstable,
+    SweepTruncated,
     UnknownObject,
+    UnreachablePoint,
+    WorkspaceLimit,
 )
 
 __all__ = [
@@ -22,5 +30,9 @@ __all__ = [
     "PortInUse",
     "RecordingError",
     "SimulationError",
+    "SimulationUnstable",
+    "SweepTruncated",
     "UnknownObject",
+    "UnreachablePoint",
+    "WorkspaceLimit",
 ]

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import enum
 from collections.abc import Iterable
 
 __all__ = [
@@ -11,7 +12,11 @@ __all__ = [
     "PortInUse",
     "RecordingError",
     "SimulationError",
+    "SimulationUnstable",
+    "SweepTruncated",
     "UnknownObject",
+    "UnreachablePoint",
+    "WorkspaceLimit",
 ]
 
 
@@ -59,3 +64,42 @@ class PortInUse(RecordingError, OSError):
 
     def __str__(self) -> str:
         return str(self.args[0])
+
+
+class SimulationUnstable(SimulationError, RuntimeError):
+    """MuJoCo warned (diverging state, contact buffer full, ...) or the state is not finite."""
+
+
+class WorkspaceLimit(enum.Enum):
+    """The limit a point or joint vector breaks (carried by :class:`UnreachablePoint`)."""
+
+    RADIUS_TOO_LARGE = "radius_too_large"
+    RADIUS_TOO_SMALL = "radius_too_small"
+    SHOULDER = "shoulder"
+    ELBOW = "elbow"
+    QUILL = "quill"
+    ROLL = "roll"
+
+
+class UnreachablePoint(SimulationError, ValueError):
+    """A tip pose outside the robot's workspace; ``limit`` names the limit it breaks.
+
+    Parameters
+    ----------
+    message : str
+        What was asked, what limit it breaks and what the limit is.
+    limit : WorkspaceLimit
+        The limit broken (for the preferred branch when no elbow branch works).
+    """
+
+    def __init__(self, message: str, limit: WorkspaceLimit) -> None:
+        super().__init__(message)
+        self.limit = limit
+
+    def __reduce__(self) -> tuple[type[UnreachablePoint], tuple[str, WorkspaceLimit]]:
+        # Pickled across processes (parallel experiments) with its limit.
+        return type(self), (str(self), self.limit)
+
+
+class SweepTruncated(SimulationError, RuntimeError):
+    """A sweep lost so many points (edges, steep surfaces) that no data curve is left."""

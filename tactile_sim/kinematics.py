@@ -10,7 +10,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from tactile_sim.errors import SimulationError
+from recognition.rigid import rotation_about
+from tactile_sim.errors import UnreachablePoint, WorkspaceLimit
 
 __all__ = [
     "COBRA600",
@@ -27,36 +28,6 @@ __all__ = [
     "probe_tip_position",
     "reach_radii",
 ]
-
-
-class WorkspaceLimit(enum.Enum):
-    """The limit a point or joint vector breaks."""
-
-    RADIUS_TOO_LARGE = "radius_too_large"
-    RADIUS_TOO_SMALL = "radius_too_small"
-    SHOULDER = "shoulder"
-    ELBOW = "elbow"
-    QUILL = "quill"
-    ROLL = "roll"
-
-
-class UnreachablePoint(SimulationError, ValueError):
-    """A tip pose outside the robot's workspace; ``limit`` names the limit it breaks.
-
-    Parameters
-    ----------
-    message : str
-        What was asked, what limit it breaks and what the limit is.
-    limit : WorkspaceLimit
-        The limit broken (for the preferred branch when no elbow branch works).
-    """
-
-    def __init__(self, message: str, limit: WorkspaceLimit) -> None:
-        super().__init__(message)
-        self.limit = limit
-
-    def __reduce__(self) -> tuple[type[UnreachablePoint], tuple[str, WorkspaceLimit]]:
-        return type(self), (str(self), self.limit)
 
 
 class ElbowBranch(enum.Enum):
@@ -150,19 +121,6 @@ COBRA600 = Cobra600Geometry()
 """The robot of ``scenes/scene.xml``: base at the world origin, probe on the flange."""
 
 
-def _rotations(axis: int, angle: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Rotation matrices about the x (0), y (1) or z (2) axis, (...) radians -> (..., 3, 3)."""
-    c, s = np.cos(angle), np.sin(angle)
-    R = np.zeros((*np.shape(angle), 3, 3))
-    i, j = [(1, 2), (2, 0), (0, 1)][axis]
-    R[..., axis, axis] = 1.0
-    R[..., i, i] = c
-    R[..., j, j] = c
-    R[..., i, j] = -s
-    R[..., j, i] = s
-    return R
-
-
 def _joint_array(joints: ArrayLike) -> NDArray[np.float64]:
     """Checks a joint vector (or a stack of them) of shape (..., 4)."""
     q = np.asarray(joints, dtype=np.float64)
@@ -171,6 +129,10 @@ def _joint_array(joints: ArrayLike) -> NDArray[np.float64]:
             f"joints must have shape (..., 4) (shoulder, elbow, quill, roll), got {q.shape}"
         )
     return q
+
+
+_HALF_TURN_ABOUT_X = np.diag([1.0, -1.0, -1.0])
+"""Rotation by pi about x, exact (``rotation_about(0, pi)`` leaves sin(pi) = 1.2e-16)."""
 
 
 def flange_pose(joints: ArrayLike, robot: Cobra600Geometry = COBRA600) -> NDArray[np.float64]:
@@ -195,14 +157,9 @@ def flange_pose(joints: ArrayLike, robot: Cobra600Geometry = COBRA600) -> NDArra
     c, s = math.cos(robot.base_yaw_rad), math.sin(robot.base_yaw_rad)
     base = robot.base_position_in_world
     yaw = robot.base_yaw_rad + shoulder + elbow + roll
-    cos_yaw, sin_yaw = np.cos(yaw), np.sin(yaw)
-    # Rotation about z by the yaw, then by pi about x (the flange z axis points down).
     T = np.zeros((*q.shape[:-1], 4, 4))
-    T[..., 0, 0] = cos_yaw
-    T[..., 0, 1] = sin_yaw
-    T[..., 1, 0] = sin_yaw
-    T[..., 1, 1] = -cos_yaw
-    T[..., 2, 2] = -1.0
+    # Rotation about z by the yaw, then half a turn about x (the flange z axis points down).
+    T[..., :3, :3] = rotation_about(2, yaw) @ _HALF_TURN_ABOUT_X
     T[..., 0, 3] = c * x_in_base - s * y_in_base + base[0]
     T[..., 1, 3] = s * x_in_base + c * y_in_base + base[1]
     T[..., 2, 3] = robot.d1_m - quill + base[2]
@@ -236,7 +193,7 @@ def probe_tip_pose(
     angles = np.asarray(deflection, dtype=np.float64)
     if angles.ndim == 0 or angles.shape[-1] != 2:
         raise ValueError(f"deflection must have shape (..., 2), got {angles.shape}")
-    R_flange_from_tip = _rotations(0, angles[..., 0]) @ _rotations(1, angles[..., 1])
+    R_flange_from_tip = rotation_about(0, angles[..., 0]) @ rotation_about(1, angles[..., 1])
     probe = robot.probe
     tip_in_flange = np.array([0.0, 0.0, probe.pivot_offset_m]) + (
         R_flange_from_tip[..., :, 2] * probe.stylus_length_m

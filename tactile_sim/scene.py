@@ -11,7 +11,7 @@ from typing import Protocol
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from tactile_sim.errors import InvalidMesh, SimulationError
+from tactile_sim.errors import InvalidMesh, SimulationError, SimulationUnstable
 
 # dm_control picks its OpenGL backend at import; without a display the default (GLFW) warns.
 # EGL renders headless here; an explicit MUJOCO_GL from the user always wins.
@@ -66,10 +66,6 @@ TIP_FORCE_SENSOR = f"{_PROBE}/tip_force"
 _NAME_PATTERN = re.compile(r"^[A-Za-z][A-Za-z0-9_\-]*$")
 _FLAT_PART_TOLERANCE_M = 1e-7
 """A collision part thinner than this in every direction is flat: MuJoCo cannot hull it."""
-
-
-class SimulationUnstable(SimulationError, RuntimeError):
-    """MuJoCo warned (diverging state, contact buffer full, ...) or the state is not finite."""
 
 
 class _HasVerticesFaces(Protocol):

@@ -25,15 +25,21 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from tactile_sim.kinematics import COBRA600, Cobra600Geometry, probe_tip_pose
 
+if TYPE_CHECKING:
+    import mujoco
+    from dm_control import mjcf
+
 __all__ = [
     "ContactEstimate",
     "GroundTruthContact",
+    "GroundTruthReader",
     "NoiseModel",
     "SensorConfig",
     "SensorReader",
@@ -220,7 +226,7 @@ class SensorReader:
         Source of the noise; the same generator state gives the same readings.
     """
 
-    def __init__(self, physics, noise: NoiseModel, rng: np.random.Generator) -> None:
+    def __init__(self, physics: mjcf.Physics, noise: NoiseModel, rng: np.random.Generator) -> None:
         from tactile_sim import scene
 
         model = physics.model
@@ -454,61 +460,67 @@ class GroundTruthContact:
     stylus_contacts: int
 
 
-def ground_truth_contact(physics) -> GroundTruthContact:
-    """Returns the true contact state of the probe from the simulator (evaluation only)."""
-    data = physics.data.ptr
-    tip_geom, site, probe_geoms = _probe_ids(physics)
-    points, normals, others = [], [], []
-    stylus = 0
-    for i in range(data.ncon):
-        contact = data.contact[i]
-        g1, g2 = int(contact.geom1), int(contact.geom2)
-        if tip_geom in (g1, g2):
-            other = g2 if g1 == tip_geom else g1
-            normal = np.array(contact.frame[:3])
-            # Orient the normal from the surface towards the tip centre.
-            if normal @ (data.site_xpos[site] - contact.pos) < 0:
-                normal = -normal
-            points.append(np.array(contact.pos))
-            normals.append(normal)
-            others.append(other)
-        elif g1 in probe_geoms or g2 in probe_geoms:
-            stylus += 1
-    return GroundTruthContact(
-        tip_centre_in_world=np.array(data.site_xpos[site]),
-        contact_points_in_world=np.array(points).reshape(-1, 3),
-        contact_normals_in_world=np.array(normals).reshape(-1, 3),
-        other_geoms=np.array(others, dtype=np.int64),
-        stylus_contacts=stylus,
-    )
+class GroundTruthReader:
+    """Reads the probe's true contact state from a simulation (evaluation only).
+
+    The probe's ids in the model (tip geom, tip site, the other probe geoms) are looked
+    up once, here.
+
+    Parameters
+    ----------
+    physics : dm_control.mjcf.Physics
+        The probing scene (:mod:`tactile_sim.scene`).
+    """
+
+    def __init__(self, physics: mjcf.Physics) -> None:
+        from tactile_sim import scene
+
+        model = physics.model.ptr
+        self._data = physics.data.ptr
+        self._tip_geom = int(physics.model.name2id(scene.PROBE_TIP_GEOM, "geom"))
+        self._tip_site = int(physics.model.name2id(scene.PROBE_TIP_SITE, "site"))
+        probe_body = physics.model.name2id("joystick_probe/probe_housing", "body")
+        self._stylus_geoms = frozenset(
+            g
+            for g in range(model.ngeom)
+            if _is_descendant(model, int(model.geom_bodyid[g]), probe_body) and g != self._tip_geom
+        )
+
+    def read(self) -> GroundTruthContact:
+        """Returns the true contact state of the probe now."""
+        data, tip_geom, site = self._data, self._tip_geom, self._tip_site
+        points, normals, others = [], [], []
+        stylus = 0
+        for i in range(data.ncon):
+            contact = data.contact[i]
+            g1, g2 = int(contact.geom1), int(contact.geom2)
+            if tip_geom in (g1, g2):
+                other = g2 if g1 == tip_geom else g1
+                normal = np.array(contact.frame[:3])
+                # Orient the normal from the surface towards the tip centre.
+                if normal @ (data.site_xpos[site] - contact.pos) < 0:
+                    normal = -normal
+                points.append(np.array(contact.pos))
+                normals.append(normal)
+                others.append(other)
+            elif g1 in self._stylus_geoms or g2 in self._stylus_geoms:
+                stylus += 1
+        return GroundTruthContact(
+            tip_centre_in_world=np.array(data.site_xpos[site]),
+            contact_points_in_world=np.array(points).reshape(-1, 3),
+            contact_normals_in_world=np.array(normals).reshape(-1, 3),
+            other_geoms=np.array(others, dtype=np.int64),
+            stylus_contacts=stylus,
+        )
 
 
-def _probe_ids(physics) -> tuple[int, int, frozenset[int]]:
-    """The tip geom, the tip site and the probe's other geoms (cached per model)."""
-    from tactile_sim import scene
-
-    model = physics.model.ptr
-    cached = _PROBE_IDS.get(id(model))
-    if cached is not None and cached[0] is model:
-        return cached[1]
-    tip_geom = physics.model.name2id(scene.PROBE_TIP_GEOM, "geom")
-    site = physics.model.name2id(scene.PROBE_TIP_SITE, "site")
-    probe_body = physics.model.name2id("joystick_probe/probe_housing", "body")
-    probe_geoms = frozenset(
-        g
-        for g in range(model.ngeom)
-        if _is_descendant(model, int(model.geom_bodyid[g]), probe_body) and g != tip_geom
-    )
-    ids = (tip_geom, site, probe_geoms)
-    _PROBE_IDS.clear()
-    _PROBE_IDS[id(model)] = (model, ids)
-    return ids
+def ground_truth_contact(physics: mjcf.Physics) -> GroundTruthContact:
+    """Returns the true contact state of the probe from the simulator (evaluation only);
+    code that reads it often keeps a :class:`GroundTruthReader`."""
+    return GroundTruthReader(physics).read()
 
 
-_PROBE_IDS: dict[int, tuple[object, tuple[int, int, frozenset[int]]]] = {}
-
-
-def _is_descendant(model, body: int, ancestor: int) -> bool:
+def _is_descendant(model: mujoco.MjModel, body: int, ancestor: int) -> bool:
     """True if ``body`` is ``ancestor`` or below it in the kinematic tree."""
     while True:
         if body == ancestor:

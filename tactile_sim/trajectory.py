@@ -4,10 +4,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import mujoco
 import numpy as np
 from numpy.typing import NDArray
+
+if TYPE_CHECKING:
+    from dm_control import mjcf
 
 __all__ = [
     "DEFAULT_RATE_HZ",
@@ -167,7 +171,7 @@ class TrajectoryRecorder:
         Samples per second of simulated time (rounded to a whole number of timesteps).
     """
 
-    def __init__(self, physics, rate_hz: float = DEFAULT_RATE_HZ) -> None:
+    def __init__(self, physics: mjcf.Physics, rate_hz: float = DEFAULT_RATE_HZ) -> None:
         from tactile_sim import scene
 
         if not math.isfinite(rate_hz) or rate_hz <= 0:

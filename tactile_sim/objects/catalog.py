@@ -15,7 +15,9 @@ from __future__ import annotations
 
 import json
 import sys
+from collections.abc import Callable
 from dataclasses import asdict, dataclass
+from pathlib import Path
 
 import numpy as np
 import trimesh
@@ -155,7 +157,7 @@ def _model_from_arrays(name: str, key: str, arrays: dict, meta: dict) -> ObjectM
     return ObjectModel(name=name, mesh=mesh, recipe_hash=key, build=build)
 
 
-def _read_model(path, name: str, key: str) -> ObjectModel | None:
+def _read_model(path: Path, name: str, key: str) -> ObjectModel | None:
     """The cached model at ``path`` if it is readable, intact and made from ``key``."""
     cached = read_npz(path, ("vertices", "faces"))
     return None if cached is None else _model_from_arrays(name, key, *cached)
@@ -199,7 +201,7 @@ def load_or_build(
             return model
         bars: list[tqdm] = []
 
-        def progress_factory(total: int):
+        def progress_factory(total: int) -> Callable[[int], None]:
             bar = tqdm(
                 total=total,
                 desc=recipe.name,

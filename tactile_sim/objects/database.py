@@ -1,8 +1,7 @@
 """The catalog's recognition database, built once and cached.
 
-This is where the simulator hands its objects to the recognition library: besides
-``recognition.DataCurves`` (the seam of DESIGN.md), it is the one place tactile_sim
-imports from ``recognition``, lazily, so that importing the catalog stays light.
+This is where the simulator hands its objects to the recognition library (a
+``recognition.ModelDatabase`` of the catalog's meshes).
 """
 
 from __future__ import annotations
@@ -10,23 +9,27 @@ from __future__ import annotations
 import hashlib
 import json
 import shutil
+from typing import TYPE_CHECKING
 
 from tactile_sim.errors import AssetError
 from tactile_sim.objects.cache import build_lock, generated_dir
 from tactile_sim.objects.catalog import load_catalog
 
+if TYPE_CHECKING:
+    from recognition import ModelDatabase
+
 __all__ = ["catalog_database"]
 
 
-def catalog_database(*, progress: bool = True):
+def catalog_database(*, progress: bool = True) -> ModelDatabase:
     """The :class:`recognition.ModelDatabase` of the ten catalog objects.
 
     Cached under ``assets/generated/database/<key>``, the key hashing every object's
     recipe hash, the table settings and the database format; a missing, stale or corrupt
     cache is rebuilt (with a progress bar and a one-line message), never trusted.
     """
-    from recognition.errors import InvalidModel
-    from recognition.surfaces.database import DATABASE_FORMAT, ModelDatabase
+    from recognition import InvalidModel, ModelDatabase
+    from recognition.surfaces.database import DATABASE_FORMAT
     from recognition.surfaces.mesh_model import MeshModelConfig
 
     catalog = load_catalog()

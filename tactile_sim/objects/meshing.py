@@ -111,7 +111,9 @@ def _evaluate_chunked(
     return out
 
 
-def _marching_cubes(volume: np.ndarray, spacing: np.ndarray, origin: np.ndarray):
+def _marching_cubes(
+    volume: np.ndarray, spacing: np.ndarray, origin: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """Vertices (recipe units) and outward-wound faces of the zero level set."""
     verts, faces, _, _ = marching_cubes(
         volume, level=0.0, spacing=tuple(spacing), allow_degenerate=False
@@ -125,7 +127,9 @@ def _marching_cubes(volume: np.ndarray, spacing: np.ndarray, origin: np.ndarray)
     return verts, faces
 
 
-def _coarse_pass(recipe: ObjectRecipe, settings: MeshingSettings, blend: float):
+def _coarse_pass(
+    recipe: ObjectRecipe, settings: MeshingSettings, blend: float
+) -> tuple[np.ndarray, float]:
     """Coarse mesh vertices (recipe units) and the coarse voxel size."""
     box = node_bounds(recipe.shape)
     if box is None:

@@ -18,7 +18,9 @@ chain of smooth blends; :func:`blend_margin` bounds how far).
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import ArrayLike
 
+from recognition.rigid import rotation_about
 from tactile_sim.objects.recipe import (
     Ellipsoid,
     HalfSpace,
@@ -30,6 +32,7 @@ from tactile_sim.objects.recipe import (
     Superellipsoid,
     Tube,
     Union,
+    Vec3,
 )
 
 __all__ = [
@@ -52,14 +55,10 @@ _TINY = 1e-12
 def rotation_matrix(rotation_deg: tuple[float, float, float]) -> np.ndarray:
     """(3, 3) rotation ``Rz @ Ry @ Rx`` from extrinsic x, y, z angles in degrees."""
     ax, ay, az = np.radians(rotation_deg)
-    cx, sx, cy, sy, cz, sz = np.cos(ax), np.sin(ax), np.cos(ay), np.sin(ay), np.cos(az), np.sin(az)
-    Rx = np.array([[1, 0, 0], [0, cx, -sx], [0, sx, cx]])
-    Ry = np.array([[cy, 0, sy], [0, 1, 0], [-sy, 0, cy]])
-    Rz = np.array([[cz, -sz, 0], [sz, cz, 0], [0, 0, 1]])
-    return Rz @ Ry @ Rx
+    return rotation_about(2, az) @ rotation_about(1, ay) @ rotation_about(0, ax)
 
 
-def _to_local(xyz: np.ndarray, center, rotation_deg) -> np.ndarray:
+def _to_local(xyz: np.ndarray, center: Vec3, rotation_deg: Vec3) -> np.ndarray:
     """(3, n) points expressed in a primitive's local frame (``R^T (p - c)``)."""
     c = np.asarray(center, dtype=float)
     d0, d1, d2 = xyz[0] - c[0], xyz[1] - c[1], xyz[2] - c[2]
@@ -97,7 +96,7 @@ def smooth_max(a: np.ndarray, b: np.ndarray, k: float) -> np.ndarray:
     return -smooth_min(-a, -b, k)
 
 
-def sd_ellipsoid(local: np.ndarray, radii) -> np.ndarray:
+def sd_ellipsoid(local: np.ndarray, radii: ArrayLike) -> np.ndarray:
     """Approximate signed distance to an axis-aligned ellipsoid centred at the origin.
 
     Parameters
@@ -123,7 +122,7 @@ def sd_ellipsoid(local: np.ndarray, radii) -> np.ndarray:
     return np.where(k1 > _TINY, k0 * (k0 - 1.0) / np.maximum(k1, _TINY), -r.min())
 
 
-def sd_superellipsoid(local: np.ndarray, radii, exponents) -> np.ndarray:
+def sd_superellipsoid(local: np.ndarray, radii: ArrayLike, exponents: ArrayLike) -> np.ndarray:
     """Radial distance estimate to an axis-aligned superellipsoid centred at the origin.
 
     Parameters
@@ -149,7 +148,9 @@ def sd_superellipsoid(local: np.ndarray, radii, exponents) -> np.ndarray:
     return _norm(local) * (1.0 - F ** (-e1 / 2.0))
 
 
-def _catmull_rom(points: np.ndarray, values: np.ndarray, subdivisions: int):
+def _catmull_rom(
+    points: np.ndarray, values: np.ndarray, subdivisions: int
+) -> tuple[np.ndarray, np.ndarray]:
     """Centripetal Catmull-Rom spline through ``points``, ``values`` interpolated linearly.
 
     Returns ``(samples, sampled_values)`` of shapes ``(s, 3)`` and ``(s,)``, including
@@ -184,7 +185,7 @@ def tube_segments(tube: Tube) -> tuple[np.ndarray, np.ndarray]:
     return points, radii
 
 
-def sd_round_cones(xyz: np.ndarray, a, b, ra: float, rb: float) -> np.ndarray:
+def sd_round_cones(xyz: np.ndarray, a: ArrayLike, b: ArrayLike, ra: float, rb: float) -> np.ndarray:
     """Exact signed distance to the round cone joining spheres (a, ra) and (b, rb).
 
     Parameters
@@ -241,7 +242,7 @@ def _sd_spiral_shell(local: np.ndarray, shell: SpiralShell) -> np.ndarray:
     r_end = shell.aperture_radius
     x, y, z = local
 
-    def whorl_distance(theta):
+    def whorl_distance(theta: np.ndarray) -> np.ndarray:
         radius = r_end * np.exp(b * theta)
         c, s = np.cos(theta), np.sin(theta)
         vx, vy = x - radius * c, y - radius * s
@@ -298,7 +299,9 @@ def _in_box(xyz: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     )
 
 
-def _rotated_box_bounds(center, rotation_deg, lo_local, hi_local):
+def _rotated_box_bounds(
+    center: Vec3, rotation_deg: Vec3, lo_local: np.ndarray, hi_local: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     corners = np.array(
         [
             [x, y, z]

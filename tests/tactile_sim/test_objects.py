@@ -7,7 +7,9 @@ import json
 import os
 import subprocess
 import sys
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -18,6 +20,7 @@ from tactile_sim.errors import AssetError, SimulationError, UnknownObject
 from tactile_sim.objects import (
     MeshingSettings,
     ObjectModel,
+    ObjectRecipe,
     build_mesh,
     load_catalog,
     load_object,
@@ -28,6 +31,7 @@ from tactile_sim.objects import (
 )
 from tactile_sim.objects import catalog as catalog_module
 from tactile_sim.objects.cache import ENV_ASSETS_DIR, generated_dir
+from tactile_sim.objects.meshing import MeshBuild
 from tactile_sim.objects.recipe import (
     Ellipsoid,
     HalfSpace,
@@ -36,7 +40,7 @@ from tactile_sim.objects.recipe import (
     recipe_from_dict,
     recipe_to_dict,
 )
-from tactile_sim.objects.sdf import blend_margin, evaluate, sd_round_cones
+from tactile_sim.objects.sdf import blend_margin, evaluate, rotation_matrix, sd_round_cones
 
 #: Thesis Table 4.4: model -> (vertices, dimensions in mm as printed, largest first).
 TABLE_4_4 = {
@@ -67,13 +71,13 @@ def catalog() -> dict[str, ObjectModel]:
 
 
 @pytest.fixture
-def tmp_assets(tmp_path, monkeypatch) -> Path:
+def tmp_assets(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
     """A fresh generated-assets directory for this test."""
     monkeypatch.setenv(ENV_ASSETS_DIR, str(tmp_path))
     return tmp_path
 
 
-def coarse_recipe(name: str = "pear"):
+def coarse_recipe(name: str = "pear") -> ObjectRecipe:
     """A low-resolution variant of a catalog recipe, quick to build."""
     target = COARSE_VERTICES.get(name, 3000)
     return dataclasses.replace(load_object_recipe(name), target_vertices=target)
@@ -82,17 +86,17 @@ def coarse_recipe(name: str = "pear"):
 # --- catalog ----------------------------------------------------------------------------
 
 
-def test_names_follow_table_4_4():
+def test_names_follow_table_4_4() -> None:
     assert object_names() == tuple(TABLE_4_4)
 
 
-def test_catalog_has_every_object(catalog):
+def test_catalog_has_every_object(catalog: dict[str, ObjectModel]) -> None:
     assert list(catalog) == list(object_names())
     assert all(model.name == name for name, model in catalog.items())
 
 
 @pytest.mark.parametrize("name", list(TABLE_4_4))
-def test_mesh_is_closed_single_component(catalog, name):
+def test_mesh_is_closed_single_component(catalog: dict[str, ObjectModel], name: str) -> None:
     mesh = catalog[name].mesh
     assert mesh.is_watertight
     assert mesh.is_winding_consistent
@@ -105,7 +109,7 @@ def test_mesh_is_closed_single_component(catalog, name):
 
 
 @pytest.mark.parametrize("name", list(TABLE_4_4))
-def test_vertex_count_in_range(catalog, name):
+def test_vertex_count_in_range(catalog: dict[str, ObjectModel], name: str) -> None:
     n = len(catalog[name].mesh.vertices)
     assert VERTEX_RANGE[0] <= n <= VERTEX_RANGE[1]
     thesis_vertices = TABLE_4_4[name][0]
@@ -114,13 +118,13 @@ def test_vertex_count_in_range(catalog, name):
 
 
 @pytest.mark.parametrize("name", list(TABLE_4_4))
-def test_dimensions_match_table_4_4(catalog, name):
+def test_dimensions_match_table_4_4(catalog: dict[str, ObjectModel], name: str) -> None:
     dims_mm = np.sort(catalog[name].dimensions_m * 1e3)[::-1]
     np.testing.assert_allclose(dims_mm, TABLE_4_4[name][1], rtol=DIMENSION_RTOL)
 
 
 @pytest.mark.parametrize("name", list(TABLE_4_4))
-def test_model_frame(catalog, name):
+def test_model_frame(catalog: dict[str, ObjectModel], name: str) -> None:
     """Metres, base on z = 0, bounding box centred on the z axis."""
     vertices = np.asarray(catalog[name].mesh.vertices)
     lo, hi = vertices.min(axis=0), vertices.max(axis=0)
@@ -130,13 +134,13 @@ def test_model_frame(catalog, name):
 
 
 @pytest.mark.parametrize("name", list(TABLE_4_4))
-def test_recipe_designed_near_target_size(catalog, name):
+def test_recipe_designed_near_target_size(catalog: dict[str, ObjectModel], name: str) -> None:
     """The fit to Table 4.4 only fine-tunes the design (no visible stretching)."""
     fit = np.asarray(catalog[name].build.fit_scale)
     assert np.all(np.abs(fit - 1.0) < MAX_FIT_DISTORTION)
 
 
-def test_unknown_object_lists_names():
+def test_unknown_object_lists_names() -> None:
     with pytest.raises(UnknownObject) as info:
         load_object("unicorn")
     message = str(info.value)
@@ -147,7 +151,7 @@ def test_unknown_object_lists_names():
     assert isinstance(info.value, KeyError)
 
 
-def test_import_does_not_load_mujoco():
+def test_import_does_not_load_mujoco() -> None:
     code = (
         "import sys, tactile_sim, tactile_sim.objects; "
         "assert 'mujoco' not in sys.modules and 'dm_control' not in sys.modules"
@@ -159,7 +163,7 @@ def test_import_does_not_load_mujoco():
 
 
 @pytest.mark.parametrize("name", list(TABLE_4_4))
-def test_recipe_round_trips_through_json(name):
+def test_recipe_round_trips_through_json(name: str) -> None:
     recipe = load_object_recipe(name)
     assert recipe.name == name
     again = recipe_from_dict(json.loads(json.dumps(recipe_to_dict(recipe))))
@@ -167,7 +171,7 @@ def test_recipe_round_trips_through_json(name):
     assert again.content_hash() == recipe.content_hash()
 
 
-def test_recipe_hash_follows_geometry_only():
+def test_recipe_hash_follows_geometry_only() -> None:
     recipe = load_object_recipe("pear")
     assert coarse_recipe().content_hash() != recipe.content_hash()
     assert recipe.content_hash("a") != recipe.content_hash("b")
@@ -188,7 +192,9 @@ def test_recipe_hash_follows_geometry_only():
         (lambda d: d.update(dimensions_m=[0.1, 0.1, "a"]), "expected a finite number"),
     ],
 )
-def test_malformed_recipe_raises_asset_error(tmp_path, change, fragment):
+def test_malformed_recipe_raises_asset_error(
+    tmp_path: Path, change: Callable[[dict[str, Any]], object], fragment: str
+) -> None:
     data = recipe_to_dict(load_object_recipe("pear"))
     change(data)
     path = tmp_path / "bad.json"
@@ -197,7 +203,7 @@ def test_malformed_recipe_raises_asset_error(tmp_path, change, fragment):
         load_recipe(path)
 
 
-def test_missing_recipe_file_raises_asset_error(tmp_path):
+def test_missing_recipe_file_raises_asset_error(tmp_path: Path) -> None:
     with pytest.raises(AssetError, match="cannot read"):
         load_recipe(tmp_path / "nothing.json")
 
@@ -205,7 +211,7 @@ def test_missing_recipe_file_raises_asset_error(tmp_path):
 # --- SDF primitives ---------------------------------------------------------------------
 
 
-def test_sphere_and_capsule_distances_are_exact():
+def test_sphere_and_capsule_distances_are_exact() -> None:
     rng = np.random.default_rng(0)
     points = rng.uniform(-30, 30, size=(2000, 3))
     sphere = Ellipsoid(center=(1.0, 2.0, 3.0), radii=(10.0, 10.0, 10.0))
@@ -220,7 +226,7 @@ def test_sphere_and_capsule_distances_are_exact():
     np.testing.assert_allclose(evaluate(tube, points), capsule, atol=1e-9)
 
 
-def test_round_cone_matches_dense_hull():
+def test_round_cone_matches_dense_hull() -> None:
     """Round cone = distance to the union of spheres swept between the two ends."""
     rng = np.random.default_rng(1)
     points = rng.uniform(-25, 25, size=(500, 3))
@@ -233,7 +239,7 @@ def test_round_cone_matches_dense_hull():
     np.testing.assert_allclose(exact, dense, atol=2e-3)
 
 
-def test_half_space_and_culling_keep_sign():
+def test_half_space_and_culling_keep_sign() -> None:
     rng = np.random.default_rng(2)
     points = rng.uniform(-40, 40, size=(3000, 3))
     plane = HalfSpace(normal=(0.0, 0.0, 2.0), offset=5.0)
@@ -246,10 +252,45 @@ def test_half_space_and_culling_keep_sign():
     np.testing.assert_allclose(culled[near], exact[near], atol=1e-9)
 
 
+def recipe_rotations() -> list[tuple[float, float, float]]:
+    """Every ``rotation_deg`` of the catalog's recipes."""
+    found = []
+
+    def walk(value: object) -> None:
+        if isinstance(value, dict):
+            if "rotation_deg" in value:
+                found.append(tuple(value["rotation_deg"]))
+            for child in value.values():
+                walk(child)
+        elif isinstance(value, list):
+            for child in value:
+                walk(child)
+
+    for name in object_names():
+        walk(recipe_to_dict(load_object_recipe(name)))
+    return found
+
+
+def test_rotation_matrix_is_bit_identical_to_the_explicit_product() -> None:
+    # Meshes are cached by recipe hash: a change in the last bit of a primitive's frame
+    # would differ silently from the cached meshes.
+    rng = np.random.default_rng(0)
+    rotations = [*recipe_rotations(), *map(tuple, rng.uniform(-180.0, 180.0, (500, 3)))]
+    assert len(rotations) > 500
+    for rotation_deg in rotations:
+        ax, ay, az = np.radians(rotation_deg)
+        cx, sx, cy, sy = np.cos(ax), np.sin(ax), np.cos(ay), np.sin(ay)
+        cz, sz = np.cos(az), np.sin(az)
+        Rx = np.array([[1, 0, 0], [0, cx, -sx], [0, sx, cx]])
+        Ry = np.array([[cy, 0, sy], [0, 1, 0], [-sy, 0, cy]])
+        Rz = np.array([[cz, -sz, 0], [sz, cz, 0], [0, 0, 1]])
+        assert np.array_equal(rotation_matrix(rotation_deg), Rz @ Ry @ Rx)
+
+
 # --- meshing ----------------------------------------------------------------------------
 
 
-def test_build_is_deterministic():
+def test_build_is_deterministic() -> None:
     recipe = coarse_recipe("snail")
     first, second = build_mesh(recipe), build_mesh(recipe)
     assert np.array_equal(first.vertices, second.vertices)
@@ -260,7 +301,7 @@ def test_build_is_deterministic():
     )
 
 
-def test_coarse_build_is_valid_and_sized():
+def test_coarse_build_is_valid_and_sized() -> None:
     recipe = coarse_recipe("elephant")
     built = build_mesh(recipe)
     assert meshing.mesh_problems(built.vertices, built.faces) == []
@@ -269,7 +310,7 @@ def test_coarse_build_is_valid_and_sized():
 
 
 @pytest.mark.parametrize("name", ["cat", "snail"])
-def test_narrow_band_matches_dense_sampling(name):
+def test_narrow_band_matches_dense_sampling(name: str) -> None:
     """Sampling every block (a huge band) gives the same surface as the narrow band."""
     recipe = coarse_recipe(name)
     band = build_mesh(recipe)
@@ -278,7 +319,7 @@ def test_narrow_band_matches_dense_sampling(name):
     np.testing.assert_allclose(band.vertices, dense.vertices, rtol=0, atol=1e-12)
 
 
-def test_mesh_problems_detects_defects():
+def test_mesh_problems_detects_defects() -> None:
     box = trimesh.creation.box()
     vertices, faces = np.asarray(box.vertices), np.asarray(box.faces)
     assert meshing.mesh_problems(vertices, faces) == []
@@ -294,16 +335,16 @@ def test_mesh_problems_detects_defects():
 class BuildCounter:
     """Wraps build_mesh and counts the calls."""
 
-    def __init__(self):
+    def __init__(self) -> None:
         self.calls = 0
 
-    def __call__(self, *args, **kwargs):
+    def __call__(self, *args: Any, **kwargs: Any) -> MeshBuild:
         self.calls += 1
         return build_mesh(*args, **kwargs)
 
 
 @pytest.fixture
-def counted_builds(monkeypatch) -> BuildCounter:
+def counted_builds(monkeypatch: pytest.MonkeyPatch) -> BuildCounter:
     counter = BuildCounter()
     monkeypatch.setattr(catalog_module, "build_mesh", counter)
     return counter
@@ -313,12 +354,12 @@ def _cache_files(directory: Path, name: str) -> list[Path]:
     return sorted((directory / "objects").glob(f"{name}-*.npz"))
 
 
-def test_env_var_selects_generated_dir(tmp_assets):
+def test_env_var_selects_generated_dir(tmp_assets: Path) -> None:
     assert generated_dir("objects") == tmp_assets / "objects"
     assert (tmp_assets / ".gitignore").read_text().strip().endswith("*")
 
 
-def test_cache_round_trip(tmp_assets, counted_builds):
+def test_cache_round_trip(tmp_assets: Path, counted_builds: BuildCounter) -> None:
     recipe = coarse_recipe()
     built = load_or_build(recipe, progress=False)
     assert counted_builds.calls == 1
@@ -335,7 +376,9 @@ def test_cache_round_trip(tmp_assets, counted_builds):
 
 
 @pytest.mark.parametrize("damage", ["garbage", "truncate", "flip_byte", "empty"])
-def test_corrupt_cache_is_rebuilt(tmp_assets, counted_builds, damage):
+def test_corrupt_cache_is_rebuilt(
+    tmp_assets: Path, counted_builds: BuildCounter, damage: str
+) -> None:
     recipe = coarse_recipe()
     built = load_or_build(recipe, progress=False)
     (path,) = _cache_files(tmp_assets, "pear")
@@ -361,7 +404,7 @@ def test_corrupt_cache_is_rebuilt(tmp_assets, counted_builds, damage):
     assert counted_builds.calls == 2
 
 
-def test_stale_cache_is_replaced(tmp_assets, counted_builds):
+def test_stale_cache_is_replaced(tmp_assets: Path, counted_builds: BuildCounter) -> None:
     old = coarse_recipe()
     load_or_build(old, progress=False)
     new = dataclasses.replace(old, target_vertices=old.target_vertices + 500)
@@ -371,7 +414,9 @@ def test_stale_cache_is_replaced(tmp_assets, counted_builds):
     assert model.recipe_hash[:16] in path.name
 
 
-def test_build_prints_one_line_message(tmp_assets, capsys):
+def test_build_prints_one_line_message(
+    tmp_assets: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     load_or_build(coarse_recipe("stone"), progress=True)
     err = capsys.readouterr().err
     assert "building the 'stone' object mesh" in err
@@ -381,7 +426,7 @@ def test_build_prints_one_line_message(tmp_assets, capsys):
 # --- render script ----------------------------------------------------------------------
 
 
-def test_render_script_writes_pngs(catalog, tmp_path):
+def test_render_script_writes_pngs(catalog: dict[str, ObjectModel], tmp_path: Path) -> None:
     module = load_script("render_objects")
     config = module.RenderConfig(
         objects=("stone", "pear"), out_dir=tmp_path, faces=1500, image_size_in=2.0, dpi=50

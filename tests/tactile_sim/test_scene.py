@@ -1,14 +1,21 @@
 """Tests of the MJCF scenes and their assembly: compile, step without warnings, probe contact."""
 
+from __future__ import annotations
+
 import math
+from pathlib import Path
 
 import mujoco
 import numpy as np
 import pytest
+from dm_control import mjcf
+from numpy.typing import ArrayLike
 
 from tactile_sim import scene
+from tactile_sim.collision import convex_decomposition, load_solid, object_parts, solid_names
 from tactile_sim.errors import InvalidMesh, SimulationError
 from tactile_sim.kinematics import inverse_kinematics, probe_tip_pose
+from tactile_sim.objects import load_object, object_names
 
 SIMULATED_SECONDS = 1.0
 CONTROL_NOISE = 0.01
@@ -17,7 +24,7 @@ CONTROL_NOISE = 0.01
 SCENE_FILES = sorted(scene.SCENES_DIR.glob("*.xml"))
 
 
-def box_mesh(size, centre=(0.0, 0.0, 0.0)):
+def box_mesh(size: ArrayLike, centre: ArrayLike = (0.0, 0.0, 0.0)) -> tuple[np.ndarray, np.ndarray]:
     """(vertices, faces) of an axis-aligned box, outward-facing triangles, metres."""
     half = np.asarray(size, dtype=float) / 2.0
     corners = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], dtype=float)
@@ -61,7 +68,7 @@ def step_with_control_noise(model: mujoco.MjModel, data: mujoco.MjData, where: s
 
 
 @pytest.mark.parametrize("path", SCENE_FILES, ids=lambda p: p.name)
-def test_scene_file_compiles_and_steps_without_warnings(path):
+def test_scene_file_compiles_and_steps_without_warnings(path: Path) -> None:
     model = mujoco.MjModel.from_xml_path(str(path))
     data = mujoco.MjData(model)
     if model.njnt:
@@ -70,12 +77,12 @@ def test_scene_file_compiles_and_steps_without_warnings(path):
 
 
 @pytest.fixture(scope="module")
-def box_physics():
+def box_physics() -> mjcf.Physics:
     """The assembled scene with a 60 x 60 x 40 mm box resting on the table at the mount."""
     return scene.load_scene([box_mesh((0.06, 0.06, 0.04), (0.0, 0.0, 0.02))])
 
 
-def test_assembled_scene_with_object_steps_without_warnings(box_physics):
+def test_assembled_scene_with_object_steps_without_warnings(box_physics: mjcf.Physics) -> None:
     physics = box_physics
     model, data = physics.model.ptr, physics.data.ptr
     assert model.opt.timestep == pytest.approx(0.001)
@@ -93,7 +100,7 @@ def test_assembled_scene_with_object_steps_without_warnings(box_physics):
     assert scene.warning_counts(physics) == {}
 
 
-def test_attached_object_pose_and_geoms(box_physics):
+def test_attached_object_pose_and_geoms(box_physics: mjcf.Physics) -> None:
     physics = box_physics
     mount = physics.named.data.site_xpos[scene.OBJECT_MOUNT_SITE]
     np.testing.assert_allclose(mount, [0.4, 0.0, 0.0])
@@ -105,7 +112,7 @@ def test_attached_object_pose_and_geoms(box_physics):
     assert model.geom_group[collision] == 2
 
 
-def test_attach_object_places_visual_and_collision_geoms_at_the_pose():
+def test_attach_object_places_visual_and_collision_geoms_at_the_pose() -> None:
     model = scene.scene_model()
     angle = 0.3
     quat = (math.cos(angle / 2), 0.0, 0.0, math.sin(angle / 2))
@@ -133,7 +140,7 @@ def test_attach_object_places_visual_and_collision_geoms_at_the_pose():
         assert m.geom_contype[collision] == 1 and m.geom_group[collision] == 3
 
 
-def test_attach_object_rejects_bad_input():
+def test_attach_object_rejects_bad_input() -> None:
     model = scene.scene_model()
     flat = (
         np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]], float) * 0.01,
@@ -152,14 +159,20 @@ def test_attach_object_rejects_bad_input():
         scene.attach_object(model, "d", [box_mesh((0.01, 0.01, 0.01))])
 
 
-def test_step_raises_on_instability():
+def test_step_raises_on_instability() -> None:
     physics = scene.load_scene()
     physics.data.qvel[0] = np.inf
     with pytest.raises(SimulationError, match="mjWARN_BAD"):
         scene.step(physics)
 
 
-def press(physics, tip_start, depth_m, speed_m_s=0.005, hold_s=0.3):
+def press(
+    physics: mjcf.Physics,
+    tip_start: ArrayLike,
+    depth_m: float,
+    speed_m_s: float = 0.005,
+    hold_s: float = 0.3,
+) -> np.ndarray:
     """Lowers the quill from a tip position by depth_m at speed_m_s, then holds; returns a log.
 
     The log has one row per step: touch (N), deflection_x, deflection_y (rad).
@@ -183,7 +196,7 @@ def press(physics, tip_start, depth_m, speed_m_s=0.005, hold_s=0.3):
     return np.array(log)
 
 
-def test_probe_deflects_against_a_box_top_and_settles():
+def test_probe_deflects_against_a_box_top_and_settles() -> None:
     # The box top slopes at 30 deg: pressing down makes the stylus tip slide and tilt the
     # stylus (a level top would only load the stylus along its axis).
     slope = math.radians(30.0)
@@ -212,7 +225,7 @@ def test_probe_deflects_against_a_box_top_and_settles():
     np.testing.assert_allclose(T_tip[:3, 3], tip, atol=1e-9)
 
 
-def test_released_stylus_returns_to_rest_within_100_ms():
+def test_released_stylus_returns_to_rest_within_100_ms() -> None:
     slope = math.radians(30.0)
     quat = (math.cos(slope / 2), math.sin(slope / 2), 0.0, 0.0)
     physics = scene.load_scene(
@@ -225,3 +238,30 @@ def test_released_stylus_returns_to_rest_within_100_ms():
     scene.step(physics, 100)
     assert physics.named.data.sensordata[scene.TIP_TOUCH_SENSOR][0] == 0.0
     assert math.degrees(np.abs(scene.probe_deflection(physics)).max()) < 0.05
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", [*object_names(), *solid_names()])
+def test_object_scene_steps_one_second_with_control_noise_without_warnings(name: str) -> None:
+    solid = name in solid_names()
+    mesh = load_solid(name).mesh if solid else load_object(name).mesh
+    if solid:
+        parts = convex_decomposition(mesh, name=name, progress=False, convex=True)
+    else:
+        parts = object_parts(load_object(name), progress=False)
+    physics = scene.load_scene(list(parts.parts), visual_mesh=mesh, name=name)
+    model, data = physics.model.ptr, physics.data.ptr
+    # Hover 3 mm above the object's top at the mount, then add seeded control noise.
+    height = float(np.max(mesh.vertices[:, 2]))
+    q = inverse_kinematics([0.4, 0.0, height + 0.003])
+    scene.set_arm_joints(physics, q)
+    rng = np.random.default_rng(0)
+    low, high = model.actuator_ctrlrange.T
+    for _ in range(int(SIMULATED_SECONDS / model.opt.timestep)):
+        data.ctrl[:] = np.clip(
+            q + CONTROL_NOISE * 0.05 * (high - low) * rng.standard_normal(model.nu), low, high
+        )
+        mujoco.mj_step(model, data)
+    assert scene.warning_counts(physics) == {}, f"{name}: MuJoCo warned"
+    for field in ("qpos", "qvel", "qacc"):
+        assert np.isfinite(getattr(data, field)).all()

@@ -10,7 +10,12 @@ import trimesh
 
 from tactile_sim import probing, scene
 from tactile_sim.kinematics import probe_tip_position
+from tactile_sim.probing import ProbeScene
+from tactile_sim.probing.rig import Rig
 from tactile_sim.sensor import (
+    ContactEstimate,
+    GroundTruthContact,
+    GroundTruthReader,
     NoiseModel,
     SensorConfig,
     SensorReader,
@@ -33,20 +38,25 @@ def tilted_slab_pose(slope_deg: float, azimuth_deg: float) -> np.ndarray:
 
 
 @pytest.fixture(scope="module")
-def slab():
+def slab() -> trimesh.Trimesh:
     """A 60 x 60 x 20 mm slab (model frame: top face at z = 0.02 m)."""
     mesh = trimesh.creation.box(extents=(0.06, 0.06, 0.02))
     mesh.apply_translation((0.0, 0.0, 0.01))
     return mesh
 
 
-def press_on(probe_scene, normal, sensor=NOISELESS, frictionless=False):
+def press_on(
+    probe_scene: ProbeScene,
+    normal: np.ndarray,
+    sensor: SensorConfig = NOISELESS,
+    frictionless: bool = False,
+) -> tuple[ContactEstimate, GroundTruthContact]:
     """Touches the slab top at the mount with the controller's approach; returns the
     estimate and the ground truth."""
     if frictionless:
         tip = probe_scene.physics.model.name2id(scene.PROBE_TIP_GEOM, "geom")
         probe_scene.physics.model.geom_friction[tip, 0] = 0.0
-    rig = probing._Rig(probe_scene, probing.ProbingConfig(), sensor, np.random.default_rng(0))
+    rig = Rig(probe_scene, probing.ProbingConfig(), sensor, np.random.default_rng(0))
     T = probe_scene.T_world_from_object
     top_point = T[:3, :3] @ [0.0, 0.0, 0.02] + T[:3, 3]
     start = top_point + (0.001 + 0.0006) * normal
@@ -57,7 +67,9 @@ def press_on(probe_scene, normal, sensor=NOISELESS, frictionless=False):
 
 
 @pytest.mark.parametrize(("slope_deg", "azimuth_deg"), [(0, 0), (20, 0), (35, 120), (55, -60)])
-def test_contact_normal_and_point_from_readings_without_friction(slab, slope_deg, azimuth_deg):
+def test_contact_normal_and_point_from_readings_without_friction(
+    slab: trimesh.Trimesh, slope_deg: float, azimuth_deg: float
+) -> None:
     T = tilted_slab_pose(slope_deg, azimuth_deg)
     probe_scene = probing.build_probe_scene(slab, T, progress=False)
     normal = T[:3, :3] @ [0.0, 0.0, 1.0]
@@ -76,7 +88,9 @@ def test_contact_normal_and_point_from_readings_without_friction(slab, slope_deg
 
 
 @pytest.mark.parametrize("slope_deg", [0.0, 30.0])
-def test_friction_moves_the_point_along_the_surface_not_off_it(slab, slope_deg):
+def test_friction_moves_the_point_along_the_surface_not_off_it(
+    slab: trimesh.Trimesh, slope_deg: float
+) -> None:
     T = tilted_slab_pose(slope_deg, 45.0)
     probe_scene = probing.build_probe_scene(slab, T, progress=False)
     normal = T[:3, :3] @ [0.0, 0.0, 1.0]
@@ -89,7 +103,7 @@ def test_friction_moves_the_point_along_the_surface_not_off_it(slab, slope_deg):
     assert angle < 1.5
 
 
-def test_contact_force_model_inverts_the_spring_balance():
+def test_contact_force_model_inverts_the_spring_balance() -> None:
     # A reading of a tilted stylus: the force the model returns produces that tilt.
     reading = SensorReading(
         time_s=0.0,
@@ -107,7 +121,7 @@ def test_contact_force_model_inverts_the_spring_balance():
     assert force[1] == pytest.approx(-k_over_l * 0.004, rel=0.05)
 
 
-def test_weak_contact_falls_back_to_the_given_normal():
+def test_weak_contact_falls_back_to_the_given_normal() -> None:
     reading = SensorReading(0.0, np.array([0.3, 1.2, 0.1, 0.0]), np.zeros(2), 0.0)
     estimate = estimate_contact(reading, SensorConfig(), fallback_normal=(0.0, 1.0, 0.0))
     assert not estimate.normal_from_force
@@ -116,7 +130,7 @@ def test_weak_contact_falls_back_to_the_given_normal():
     np.testing.assert_allclose(estimate.point_in_world, centre - [0.0, 0.001, 0.0])
 
 
-def test_readings_are_seeded_and_noise_has_the_documented_magnitude():
+def test_readings_are_seeded_and_noise_has_the_documented_magnitude() -> None:
     physics = scene.load_scene()
     noise = NoiseModel()
     first = SensorReader(physics, noise, np.random.default_rng(7))
@@ -128,12 +142,24 @@ def test_readings_are_seeded_and_noise_has_the_documented_magnitude():
     assert np.all(np.abs(samples.mean(axis=0) - exact) < 4.0 * noise.sigmas / math.sqrt(5000))
 
 
-def test_noise_model_rejects_negative_sigmas():
+def test_ground_truth_reader_reads_the_scene_it_was_made_for() -> None:
+    scenes = [scene.load_scene(), scene.load_scene()]
+    scene.set_arm_joints(scenes[1], [0.3, 1.0, 0.05, 0.0])
+    readers = [GroundTruthReader(physics) for physics in scenes]
+    for physics, reader in zip(scenes, readers, strict=True):
+        truth = reader.read()
+        expected = probe_tip_position(scene.arm_joints(physics))
+        np.testing.assert_allclose(truth.tip_centre_in_world, expected, atol=1e-6)
+        assert truth.stylus_contacts == 0 and len(truth.contact_points_in_world) == 0
+        assert ground_truth_contact(physics).stylus_contacts == truth.stylus_contacts
+
+
+def test_noise_model_rejects_negative_sigmas() -> None:
     with pytest.raises(ValueError, match="quill_m"):
         NoiseModel(quill_m=-1e-6)
 
 
-def test_sensed_points_against_ground_truth_on_the_sphere():
+def test_sensed_points_against_ground_truth_on_the_sphere() -> None:
     session = probing.probe_object("sphere", seed=3, n_points=9)
     centre_of = session.ground_truth.T_world_from_object[:3, 3] + [0.0, 0.0, 0.033]
     for sweep in session.sweeps:

@@ -1,0 +1,43 @@
+"""Probing objects with the simulated robot: sessions of three sweeps, and outline traces.
+
+``probe_object("cat", seed=0) -> ProbeSession`` places the object on the table
+(:mod:`~tactile_sim.probing.placement`), compiles the scene
+(:mod:`~tactile_sim.probing.probe_scene`), plans three sampling planes through a point p
+(:mod:`~tactile_sim.probing.plan`) and drives the rig (:mod:`~tactile_sim.probing.rig`)
+through one sweep along each (:mod:`~tactile_sim.probing.sweep`); the session
+(:mod:`~tactile_sim.probing.session`) holds the three data curves, and the ground truth
+apart. :func:`trace_contour` (:mod:`~tactile_sim.probing.contour`) traces an outline in a
+horizontal plane instead. The controller's parameters are one :class:`ProbingConfig`
+(:mod:`~tactile_sim.probing.config`).
+"""
+
+from tactile_sim.errors import SweepTruncated
+from tactile_sim.probing.config import ProbingConfig
+from tactile_sim.probing.contour import ContourTrace, trace_contour
+from tactile_sim.probing.placement import PlacementConfig, ProbeTarget, random_pose, resolve_object
+from tactile_sim.probing.plan import SamplingPlane, choose_point, sampling_planes
+from tactile_sim.probing.probe_scene import ProbeScene, build_probe_scene
+from tactile_sim.probing.session import GroundTruth, ProbeSession, probe_object
+from tactile_sim.probing.sweep import StopReason, SweepResult, SweepSide
+
+__all__ = [
+    "ContourTrace",
+    "GroundTruth",
+    "PlacementConfig",
+    "ProbeScene",
+    "ProbeSession",
+    "ProbeTarget",
+    "ProbingConfig",
+    "SamplingPlane",
+    "StopReason",
+    "SweepResult",
+    "SweepSide",
+    "SweepTruncated",
+    "build_probe_scene",
+    "choose_point",
+    "probe_object",
+    "random_pose",
+    "resolve_object",
+    "sampling_planes",
+    "trace_contour",
+]

@@ -1,0 +1,124 @@
+"""Probing sessions: the sweep controller on a sphere and a cube, reproducibility, bad input."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import trimesh
+
+from recognition import DataCurves
+from recognition.rigid import pose_matrix
+from tactile_sim.errors import SimulationError, SweepTruncated, UnreachablePoint, WorkspaceLimit
+from tactile_sim.probing import ProbeScene, StopReason, build_probe_scene, probe_object
+from tactile_sim.probing.placement import MOUNT_IN_WORLD
+
+AT_MOUNT = pose_matrix(np.eye(3), MOUNT_IN_WORLD)
+"""T_world_from_object: upright on the object mount, axes parallel to the world's."""
+
+
+def test_session_on_the_sphere(sphere_scene: ProbeScene) -> None:
+    session = probe_object(
+        "sphere", seed=11, n_points=9, probe_scene=sphere_scene, first_plane_yaw_rad=0.2
+    )
+    assert isinstance(session.curves, DataCurves)
+    assert [len(c) for c in session.curves.curves] == [9, 9, 9]
+    assert not session.truncated and session.messages == ()
+    np.testing.assert_allclose(session.curves.approach, [0.0, 0.0, -1.0])
+    truth = session.ground_truth
+    # The three curves meet at the planned p (the first sweep re-aims its approach).
+    assert np.linalg.norm(session.curves.intersection - truth.point_in_world) < 0.05e-3
+    centre = truth.T_world_from_object[:3, 3] + [0.0, 0.0, 0.033]
+    for sweep in session.sweeps:
+        assert sweep.p_index == 4
+        # Points on the sphere (icosphere facets lie up to 9.4 um inside it).
+        radial = np.linalg.norm(sweep.points_in_world - centre, axis=1) - 0.033
+        assert np.all(np.abs(radial) < 20e-6)
+        # Neighbouring points one spacing apart, near the sampling plane.
+        steps = np.linalg.norm(np.diff(sweep.points_in_world, axis=0), axis=1)
+        np.testing.assert_allclose(steps, 1.2e-3, atol=0.15e-3)
+        assert np.all(np.abs(sweep.plane.distance(sweep.points_in_world)) < 0.25e-3)
+        # Ground truth is kept apart and agrees.
+        error = np.linalg.norm(sweep.points_in_world - sweep.true_contact_points_in_world, axis=1)
+        # (friction leaves up to tip radius x sin(friction angle) = 0.1 mm along the
+        # surface where the tip barely slid).
+        assert error.mean() < 0.04e-3 and error.max() < 0.15e-3
+
+
+def test_same_seed_same_session_other_seed_other_session(sphere_scene: ProbeScene) -> None:
+    kwargs = {"n_points": 5, "probe_scene": sphere_scene}
+    first = probe_object("sphere", seed=5, **kwargs)
+    again = probe_object("sphere", seed=5, **kwargs)
+    other = probe_object("sphere", seed=6, **kwargs)
+    for a, b in zip(first.curves.curves, again.curves.curves, strict=True):
+        np.testing.assert_array_equal(a, b)
+    assert not np.allclose(first.curves.points, other.curves.points)
+
+
+def test_unreachable_point_names_the_limit() -> None:
+    far = pose_matrix(np.eye(3), (0.72, 0.0, 0.0))  # beyond the arm's reach of 0.60 m
+    with pytest.raises(UnreachablePoint, match="radius too large") as error:
+        probe_object("sphere", seed=0, T_world_from_object=far, progress=False)
+    assert error.value.limit is WorkspaceLimit.RADIUS_TOO_LARGE
+
+
+def test_sweep_over_an_edge_is_truncated_and_reported() -> None:
+    # A 40 mm cube; p 3 mm from its +x edge, the first plane along x: the + side of that
+    # sweep runs off the top after about two points and the - side makes up for it.
+    cube = trimesh.creation.box(extents=(0.04, 0.04, 0.04))
+    cube.apply_translation((0.0, 0.0, 0.02))
+    session = probe_object(
+        cube,
+        seed=2,
+        n_points=9,
+        point=(0.017, 0.0, 0.04),
+        first_plane_yaw_rad=0.0,
+        T_world_from_object=AT_MOUNT,
+        progress=False,
+    )
+    sweep = session.sweeps[0]
+    assert sweep.truncated and session.truncated
+    plus, minus = sweep.sides
+    assert plus.stop in (StopReason.LOST_CONTACT, StopReason.TOO_STEEP)
+    assert plus.acquired < plus.requested
+    assert minus.stop is StopReason.COMPLETE and minus.requested > 4
+    assert sweep.n_points == 9 and sweep.p_index == 9 - 1 - plus.acquired
+    assert any(
+        "sweep 0" in m and ("lost contact" in m or "too steep" in m) for m in session.messages
+    )
+    # Every sensed point is on the cube (on its top, or on the edge the tip rolled onto).
+    q = np.abs(sweep.points_in_world - [0.40, 0.0, 0.02]) - 0.02
+    distance = np.linalg.norm(np.maximum(q, 0.0), axis=1) + np.minimum(q.max(axis=1), 0.0)
+    # Friction tilts the sensed normal at an edge, where neither correction applies.
+    assert np.all(np.abs(distance[:-2]) < 10e-6) and np.all(np.abs(distance) < 0.15e-3)
+
+
+def test_instability_raises_simulation_error(sphere_scene: ProbeScene) -> None:
+    broken = build_probe_scene("sphere", AT_MOUNT, progress=False)
+    broken.physics.model.opt.timestep = 0.5  # far beyond the servos' stability limit
+    with pytest.raises(SimulationError):
+        probe_object("sphere", seed=0, n_points=5, probe_scene=broken)
+
+
+def test_bad_parameters_are_rejected(sphere_scene: ProbeScene) -> None:
+    with pytest.raises(ValueError, match="n_points"):
+        probe_object("sphere", seed=0, n_points=3, probe_scene=sphere_scene)
+    with pytest.raises(ValueError, match="plane_angle_deg"):
+        probe_object("sphere", seed=0, plane_angle_deg=0.0, probe_scene=sphere_scene)
+    with pytest.raises(ValueError, match="rigid"):
+        build_probe_scene("sphere", np.diag([2.0, 1.0, 1.0, 1.0]), progress=False)
+
+
+def test_sweeps_that_keep_too_few_points_raise_sweep_truncated() -> None:
+    # A rib 3 mm wide: every plane through its top crosses it in a few millimetres.
+    rib = trimesh.creation.box(extents=(0.003, 0.04, 0.02))
+    rib.apply_translation((0.0, 0.0, 0.01))
+    with pytest.raises(SweepTruncated, match=r"fewer than 5 points.*sweep 0"):
+        probe_object(
+            rib,
+            seed=0,
+            n_points=9,
+            point=(0.0, 0.0, 0.02),
+            first_plane_yaw_rad=0.0,
+            T_world_from_object=AT_MOUNT,
+            progress=False,
+        )
