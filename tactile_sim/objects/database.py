@@ -28,9 +28,7 @@ def catalog_database(*, progress: bool = True) -> ModelDatabase:
     recipe hash, the table settings and the database format; a missing, stale or corrupt
     cache is rebuilt (with a progress bar and a one-line message), never trusted.
     """
-    from recognition import InvalidModel, ModelDatabase
-    from recognition.surfaces.database import DATABASE_FORMAT
-    from recognition.surfaces.mesh_model import MeshModelConfig
+    from recognition import DATABASE_FORMAT, InvalidModel, MeshModelConfig, ModelDatabase
 
     catalog = load_catalog()
     config = MeshModelConfig()
