@@ -23,6 +23,7 @@ from dm_control import mjcf
 
 __all__ = [
     "ARM_JOINTS",
+    "BODY_CONTACT",
     "DEFLECTION_JOINTS",
     "FLANGE_SITE",
     "OBJECT_MOUNT_SITE",
@@ -32,10 +33,13 @@ __all__ = [
     "ROBOT_PATH",
     "SCENES_DIR",
     "SCENE_PATH",
+    "TIP_CONTACT",
+    "TIP_CONTACT_BODY",
     "TIP_FORCE_SENSOR",
     "TIP_TOUCH_SENSOR",
     "MeshLike",
     "SimulationUnstable",
+    "add_tip_contact",
     "arm_joints",
     "attach_object",
     "build_physics",
@@ -62,6 +66,15 @@ PROBE_TIP_SITE = f"{_PROBE}/probe_tip"
 PROBE_TIP_GEOM = f"{_PROBE}/tip"
 TIP_TOUCH_SENSOR = f"{_PROBE}/tip_touch"
 TIP_FORCE_SENSOR = f"{_PROBE}/tip_force"
+TIP_CONTACT_BODY = "tip_contact"
+"""The mocap body whose box stands for the object under the tip (:func:`add_tip_contact`)."""
+
+BODY_CONTACT = 1
+"""Contype/conaffinity bit of the probe's housing and shaft, the table, the object's parts."""
+TIP_CONTACT = 2
+"""Contype/conaffinity bit of the probe's tip, the table and the tip's contact box."""
+TIP_CONTACT_HALF_SIZE_M = (3e-3, 3e-3, 1e-3)
+"""Half sizes of the tip's contact box: its top face reaches 3 mm around the contact."""
 
 _NAME_PATTERN = re.compile(r"^[A-Za-z][A-Za-z0-9_\-]*$")
 _FLAT_PART_TOLERANCE_M = 1e-7
@@ -137,6 +150,7 @@ def attach_object(
     quat_wxyz_in_mount: ArrayLike = (1.0, 0.0, 0.0, 0.0),
     maxhullvert: int | None = None,
     rgba: tuple[float, float, float, float] = (0.8, 0.72, 0.6, 1.0),
+    tip_collides: bool = True,
 ) -> mjcf.Element:
     """Attaches a fixed object at the scene's object mount; returns the object's body.
 
@@ -144,6 +158,9 @@ def attach_object(
     its convex hull; group 3, hidden by default) and one visual mesh geom that does not
     collide (group 2). Compiled names carry the prefix ``f"{name}/"``: the body is
     ``f"{name}/object"``, its geoms ``f"{name}/collision_{i}"`` and ``f"{name}/visual"``.
+    The parts collide with the probe's housing and shaft, and with its tip unless
+    ``tip_collides`` is False (the tip then meets the object through
+    :func:`add_tip_contact`).
 
     Parameters
     ----------
@@ -165,6 +182,8 @@ def attach_object(
         Cap on each collision hull's vertex count (> 3); None keeps every vertex.
     rgba : (4,) float
         Colour of the visual mesh.
+    tip_collides : bool
+        Whether the convex parts collide with the probe's tip too.
 
     Returns
     -------
@@ -217,6 +236,8 @@ def attach_object(
             group=3,
             density=0,
             rgba=(0.2, 0.6, 0.9, 0.5),
+            contype=BODY_CONTACT,
+            conaffinity=BODY_CONTACT | (TIP_CONTACT if tip_collides else 0),
         )
     if visual_mesh is not None:
         vertices, faces = _mesh_arrays(visual_mesh, f"object {name!r} visual mesh")
@@ -237,6 +258,28 @@ def attach_object(
             geom.group = 2
             geom.rgba = rgba
     mount.attach(obj)
+    return body
+
+
+def add_tip_contact(model: mjcf.RootElement) -> mjcf.Element:
+    """Adds the tip's contact box: a mocap body that stands for the object under the tip.
+
+    Its box geom collides with the probe's tip only (bit :data:`TIP_CONTACT`; group 4,
+    hidden); :mod:`tactile_sim.probing.tip_contact` keeps its top face tangent to the
+    object's mesh at the point nearest the tip centre. It waits far below the table until
+    then. Returns the mocap body (compiled name :data:`TIP_CONTACT_BODY`).
+    """
+    body = model.worldbody.add("body", name=TIP_CONTACT_BODY, mocap=True, pos=(0.0, 0.0, -1.0))
+    body.add(
+        "geom",
+        name=TIP_CONTACT_BODY,
+        type="box",
+        size=TIP_CONTACT_HALF_SIZE_M,
+        contype=TIP_CONTACT,
+        conaffinity=TIP_CONTACT,
+        group=4,
+        rgba=(0.2, 0.9, 0.3, 0.4),
+    )
     return body
 
 

@@ -447,6 +447,11 @@ class GroundTruthContact:
         MuJoCo's contact points of the tip geom (midway between the surfaces).
     contact_normals_in_world : (k, 3) float
         Their unit normals, pointing from the other geom towards the tip.
+    surface_points_in_world : (k, 3) float, metres
+        Where each contact meets the surface of the other geom (the collider the tip
+        touches): the contact point moved out by half the penetration.
+    penetrations_m : (k,) float, metres
+        Depth of each contact (positive: the tip is inside the other geom).
     other_geoms : (k,) int
         Ids of the geoms the tip touches.
     stylus_contacts : int
@@ -456,8 +461,17 @@ class GroundTruthContact:
     tip_centre_in_world: NDArray[np.float64]
     contact_points_in_world: NDArray[np.float64]
     contact_normals_in_world: NDArray[np.float64]
+    surface_points_in_world: NDArray[np.float64]
+    penetrations_m: NDArray[np.float64]
     other_geoms: NDArray[np.int64]
     stylus_contacts: int
+
+    @property
+    def touched_point_in_world(self) -> NDArray[np.float64]:
+        """Returns the surface point of the deepest contact, (3,) metres (NaN: none)."""
+        if len(self.penetrations_m) == 0:
+            return np.full(3, np.nan)
+        return self.surface_points_in_world[int(np.argmax(self.penetrations_m))]
 
 
 class GroundTruthReader:
@@ -489,7 +503,7 @@ class GroundTruthReader:
     def read(self) -> GroundTruthContact:
         """Returns the true contact state of the probe now."""
         data, tip_geom, site = self._data, self._tip_geom, self._tip_site
-        points, normals, others = [], [], []
+        points, normals, others, depths = [], [], [], []
         stylus = 0
         for i in range(data.ncon):
             contact = data.contact[i]
@@ -503,12 +517,18 @@ class GroundTruthReader:
                 points.append(np.array(contact.pos))
                 normals.append(normal)
                 others.append(other)
+                depths.append(-float(contact.dist))
             elif g1 in self._stylus_geoms or g2 in self._stylus_geoms:
                 stylus += 1
+        points_array = np.array(points).reshape(-1, 3)
+        normals_array = np.array(normals).reshape(-1, 3)
+        penetrations = np.array(depths)
         return GroundTruthContact(
             tip_centre_in_world=np.array(data.site_xpos[site]),
-            contact_points_in_world=np.array(points).reshape(-1, 3),
-            contact_normals_in_world=np.array(normals).reshape(-1, 3),
+            contact_points_in_world=points_array,
+            contact_normals_in_world=normals_array,
+            surface_points_in_world=points_array + 0.5 * penetrations[:, None] * normals_array,
+            penetrations_m=penetrations,
             other_geoms=np.array(others, dtype=np.int64),
             stylus_contacts=stylus,
         )

@@ -44,12 +44,16 @@ class ProbeScene:
         The object (name, mesh, collision parts).
     T_world_from_object : (4, 4) float
     build_seconds : float, seconds
+    tip_contact : bool
+        The tip meets the object's own mesh through the tip's contact box
+        (:mod:`tactile_sim.probing.tip_contact`); False: the object's convex parts.
     """
 
     physics: mjcf.Physics
     target: ProbeTarget
     T_world_from_object: NDArray[np.float64]
     build_seconds: float
+    tip_contact: bool = True
     _tree: Any = field(default=None, repr=False)
     _ray_tree: Any = field(default=None, repr=False)
     _face_normals: Any = field(default=None, repr=False)
@@ -119,6 +123,7 @@ def build_probe_scene(
     *,
     seed: int = 0,
     progress: bool = True,
+    tip_contact: bool = True,
 ) -> ProbeScene:
     """Returns the compiled probing scene with an object placed on the table.
 
@@ -132,6 +137,9 @@ def build_probe_scene(
         Seed of the random pose.
     progress : bool
         Announce cold builds (meshes, hulls) with progress bars.
+    tip_contact : bool
+        The tip meets the object's own mesh (:mod:`tactile_sim.probing.tip_contact`);
+        False: the tip collides with the object's convex parts, as the rest of the probe.
     """
     start = time.perf_counter()
     target = resolve_object(obj, progress=progress)
@@ -151,13 +159,17 @@ def build_probe_scene(
         visual_mesh=target.mesh,
         position_in_mount=T[:3, 3] - MOUNT_IN_WORLD,
         quat_wxyz_in_mount=quat,
+        tip_collides=not tip_contact,
     )
+    if tip_contact:
+        scene.add_tip_contact(model)
     physics = scene.build_physics(model)
     return ProbeScene(
         physics=physics,
         target=target,
         T_world_from_object=T,
         build_seconds=time.perf_counter() - start,
+        tip_contact=tip_contact,
     )
 
 

@@ -22,6 +22,7 @@ from tactile_sim import scene
 from tactile_sim.kinematics import inverse_kinematics, probe_tip_position
 from tactile_sim.probing.config import ProbingConfig
 from tactile_sim.probing.probe_scene import ProbeScene
+from tactile_sim.probing.tip_contact import TipContact
 from tactile_sim.sensor import (
     ContactEstimate,
     SensorConfig,
@@ -64,8 +65,11 @@ class Rig:
         physics = probe_scene.physics
         self.physics = physics
         self.model, self.data = physics.model.ptr, physics.data.ptr
-        # Steps like mujoco.mj_step(model, data[, nstep]); the recorder samples on the way.
-        self._step = mujoco.mj_step if recorder is None else recorder.step
+        # Steps like mujoco.mj_step(model, data[, nstep]); the recorder samples on the way,
+        # the tip's contact box follows the tip.
+        step = mujoco.mj_step if recorder is None else recorder.step
+        self.tip_contact = TipContact(probe_scene) if probe_scene.tip_contact else None
+        self._step = step if self.tip_contact is None else self.tip_contact.stepping(step)
         self.config = config
         self.sensor = sensor
         self.reader = SensorReader(physics, sensor.noise, rng)

@@ -102,6 +102,9 @@ class SweepResult:
         Ground truth: the simulator's tip centres at the readings.
     true_contact_points_in_world : (n, 3) float, metres
         Ground truth: closest points of the original mesh to the true tip centres.
+    simulated_contact_points_in_world : (n, 3) float, metres
+        Ground truth: where MuJoCo's contact met the surface the tip touched (the
+        collider) at each reading; NaN where it touched nothing.
     stylus_contacts : (n,) int
         Ground truth: contacts of the shaft or housing at each reading (should be 0).
     reading_times_s : (n,) float, seconds
@@ -116,6 +119,7 @@ class SweepResult:
     sides: tuple[SweepSide, ...]
     true_tip_centres_in_world: NDArray[np.float64]
     true_contact_points_in_world: NDArray[np.float64]
+    simulated_contact_points_in_world: NDArray[np.float64]
     stylus_contacts: NDArray[np.int64]
     reading_times_s: NDArray[np.float64] = field(default_factory=lambda: np.empty(0))
 
@@ -137,6 +141,7 @@ class Sample:
     estimate: ContactEstimate
     slide: NDArray[np.float64]
     true_tip: NDArray[np.float64]
+    touched: NDArray[np.float64]
     stylus_contacts: int
 
 
@@ -190,7 +195,13 @@ class SweepRunner:
         truth = self.truth.read()
         self.highest_z = max(self.highest_z, float(estimate.tip_centre_in_world[2]))
         slide = estimate.tip_centre_in_world - self.rig.last_touch_centre
-        return Sample(estimate, slide, truth.tip_centre_in_world, truth.stylus_contacts)
+        return Sample(
+            estimate,
+            slide,
+            truth.tip_centre_in_world,
+            truth.touched_point_in_world,
+            truth.stylus_contacts,
+        )
 
     def first(
         self,
@@ -337,6 +348,7 @@ def sweep_result(
         sides=tuple(sides),
         true_tip_centres_in_world=true_tips,
         true_contact_points_in_world=true_contacts,
+        simulated_contact_points_in_world=np.array([s.touched for s in samples]).reshape(-1, 3),
         stylus_contacts=np.array([s.stylus_contacts for s in samples], dtype=np.int64),
         reading_times_s=np.array([s.estimate.reading.time_s for s in samples]),
     )
