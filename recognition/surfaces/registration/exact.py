@@ -18,6 +18,8 @@ from recognition.surfaces.registration.result import Registration
 __all__ = ["exact_error_m", "refine_exact", "with_exact_error"]
 
 Array = NDArray[np.float64]
+PoseState = tuple[Array, Array, Array, Array, Array, NDArray[np.int64]]
+"""R, t, the moved points, their distances, closest points and faces: one pose."""
 
 
 def exact_error_m(model: MeshModel, points: ArrayLike, R: ArrayLike, t: ArrayLike) -> float:
@@ -47,7 +49,7 @@ def refine_exact(
     reach = float(np.max(np.linalg.norm(points - points.mean(axis=0), axis=1)))
     R0, t0 = np.asarray(R, float), np.asarray(t, float)
 
-    def evaluate(R: Array, t: Array) -> tuple[Array, ...]:
+    def evaluate(R: Array, t: Array) -> PoseState:
         X = points @ R.T + t
         distance, q, face = model.distance.closest(X)
         return R, t, X, distance, q, face
@@ -99,7 +101,7 @@ def with_exact_error(
     model: MeshModel,
     curves: DataCurves,
     refine: bool = False,
-    point: np.ndarray | None = None,
+    point: Array | None = None,
     iterations: int = 12,
 ) -> Registration:
     """``registration`` with its error computed exactly (if it was not).
