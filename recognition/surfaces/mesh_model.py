@@ -519,7 +519,7 @@ class MeshModel:
         return self._distance
 
     def cell_keys(self, spacing: float) -> IntArray:
-        """(n,) int64 key of the cubic cell of side ``spacing`` (metres) holding each vertex (cached)."""
+        """(n,) int64 key of the cubic cell (side ``spacing``, metres) of each vertex (cached)."""
         keys = self._cell_keys.get(spacing)
         if keys is None:
             cell = np.floor((self.vertices - self.vertices.min(0)) / spacing).astype(np.int64)

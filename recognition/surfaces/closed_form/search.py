@@ -20,6 +20,7 @@ from recognition.least_squares import (
     LeastSquaresConfig,
     LeastSquaresStatus,
     LinearSolve,
+    State,
     damped_least_squares,
 )
 from recognition.surfaces.closed_form.superposition import (
@@ -33,7 +34,6 @@ from recognition.surfaces.closed_form.surface import EDGE_MARGIN, ClosedFormSurf
 __all__ = ["LocalSearch", "levenberg_marquardt", "refine_rigid_motion", "steepest_descent"]
 
 Array = NDArray[np.float64]
-State = tuple[np.ndarray, ...]
 
 
 @dataclass(frozen=True)
@@ -93,14 +93,14 @@ def _linearization(state: State) -> tuple[Array, Array]:
     return state[-2], state[-1]
 
 
-def _wrap(surface: ClosedFormSurface, x: np.ndarray) -> Array:
+def _wrap(surface: ClosedFormSurface, x: Array) -> Array:
     u, v = surface.contain(x[0], x[1])
     return np.array([u, v, np.mod(x[2], 2 * np.pi)])
 
 
 def levenberg_marquardt(
     surface: ClosedFormSurface,
-    local_points: np.ndarray,
+    local_points: Array,
     x0: ArrayLike,
     max_iterations: int = 100,
     tolerance: float = 1e-10,
@@ -125,7 +125,7 @@ def levenberg_marquardt(
     def retract(state: State, step: Array) -> State:
         return evaluate(_wrap(surface, state[0][0] + step[0]))
 
-    def held(state: State, step: Array) -> np.ndarray:
+    def held(state: State, step: Array) -> NDArray[np.bool_]:
         x = state[0][0]
         out = np.zeros(3, bool)
         out[:2] = bounded & (
@@ -186,7 +186,7 @@ def _line_minimum(
 
 def steepest_descent(
     surface: ClosedFormSurface,
-    local_points: np.ndarray,
+    local_points: Array,
     x0: ArrayLike,
     max_iterations: int = 2000,
     tolerance: float = 1e-10,
@@ -234,9 +234,9 @@ def steepest_descent(
 
 def refine_rigid_motion(
     surface: ClosedFormSurface,
-    local_points: np.ndarray,
-    R0: np.ndarray,
-    c0: np.ndarray,
+    local_points: Array,
+    R0: ArrayLike,
+    c0: ArrayLike,
     max_iterations: int = 50,
     tolerance: float = 1e-10,
 ) -> tuple[Array, Array, LocalSearch]:

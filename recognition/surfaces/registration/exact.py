@@ -9,7 +9,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
-from recognition.least_squares import LeastSquaresConfig, damped_least_squares
+from recognition.least_squares import LeastSquaresConfig, State, damped_least_squares
 from recognition.rigid import cross, pose_matrix
 from recognition.surfaces.data_curves import DataCurves
 from recognition.surfaces.mesh_model import MeshModel
@@ -54,10 +54,10 @@ def refine_exact(
         distance, q, face = model.distance.closest(X)
         return R, t, X, distance, q, face
 
-    def cost(state: tuple[np.ndarray, ...]) -> Array:
+    def cost(state: State) -> Array:
         return np.array([float(np.mean(state[3][0] ** 2))])
 
-    def linearize(state: tuple[np.ndarray, ...]) -> tuple[Array, Array]:
+    def linearize(state: State) -> tuple[Array, Array]:
         X, q, face = state[2][0], state[4][0], state[5][0]
         n = model.distance.face_normals[face]
         r = np.einsum("ij,ij->i", X - q, n)
@@ -65,14 +65,14 @@ def refine_exact(
         J = np.concatenate([cross(X - c, n), n], axis=1)
         return r[None], J[None]
 
-    def retract(state: tuple[np.ndarray, ...], step: Array) -> tuple[np.ndarray, ...]:
+    def retract(state: State, step: Array) -> State:
         R, t, X = state[0][0], state[1][0], state[2][0]
         c = X.mean(axis=0)
         dR = Rotation.from_rotvec(step[0, :3]).as_matrix()
         moved = evaluate(dR @ R, dR @ (t - c) + c + step[0, 3:])
         return tuple(a[None] for a in moved)
 
-    def step_size(_state: tuple[np.ndarray, ...], step: Array) -> Array:
+    def step_size(_state: State, step: Array) -> Array:
         return np.linalg.norm(step[:, :3], axis=1) * reach + np.linalg.norm(step[:, 3:], axis=1)
 
     result = damped_least_squares(
