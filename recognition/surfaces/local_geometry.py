@@ -266,8 +266,8 @@ def local_surface_geometry(
 ) -> LocalSurfaceGeometry:
     """Normal (4.1) and principal curvatures (4.2)-(4.6) at the curves' common point.
 
-    ``point`` (default ``curves.intersection``) is where the curves are fitted and the
-    geometry evaluated.
+    ``point`` ((3,), metres; default ``curves.intersection``) is where the curves are
+    fitted and the geometry evaluated.
 
     With ``curves.approach`` the normal points against the approach (out of the object);
     otherwise it is oriented so that the mean normal curvature is positive (the data are

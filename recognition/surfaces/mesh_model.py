@@ -82,7 +82,7 @@ class MeshModelConfig:
 
 
 def mesh_hash(vertices: ArrayLike, faces: ArrayLike) -> str:
-    """SHA-256 of the vertex and face arrays (float64 / int64, C order)."""
+    """SHA-256 of the vertex (n, 3) and face (f, 3) arrays (float64 / int64, C order)."""
     h = hashlib.sha256()
     h.update(np.ascontiguousarray(vertices, dtype=np.float64).tobytes())
     h.update(np.ascontiguousarray(faces, dtype=np.int64).tobytes())

@@ -111,6 +111,8 @@ def levenberg_marquardt(
     phi; (u, v) stay in the domain (wrapped where periodic; a parameter on an edge of
     the domain is held there while the step would take it out). ``cost`` is E (4.11)
     at the end; ``tolerance`` is the relative decrease of sum r_i^2 at which it stops.
+    ``local_points`` (n, 3) are the data points in the local frame at p, model units;
+    ``x0`` (3,) is the start (u, v, phi), phi in radians.
     """
     (u0, u1), (v0, v1) = surface.domain
     margin = EDGE_MARGIN * np.array([u1 - u0, v1 - v0])
@@ -196,6 +198,8 @@ def steepest_descent(
     Each iteration minimises E along -grad E (bracketing and golden-section search) and
     the search stops when no step along it decreases E ("until no further minimization
     is possible") or E decreases by less than ``tolerance`` relative.
+    ``local_points`` (n, 3) are the data points in the local frame at p, model units;
+    ``x0`` (3,) is the start (u, v, phi), phi in radians.
     """
     x = _wrap(surface, np.asarray(x0, float))
     E, grad = superposition_error_gradient(surface, local_points, *x)

@@ -182,7 +182,9 @@ def superposition_error(
 ) -> float | Array:
     """Superposition error E(u, v, phi), thesis Eq. (4.11).
 
-    ``phi`` may be an array: E is then evaluated for every angle, same shape.
+    ``local_points`` (n, 3) are the data points in the local frame at p
+    (:func:`local_coordinates`), model units; ``phi`` (radians) may be an array: E
+    (model units) is then evaluated for every angle, same shape.
     """
     phi_arr = np.asarray(phi, float)
     E = _phi_terms(surface, local_points, u, v)(phi_arr.reshape(-1))[0]

@@ -147,7 +147,7 @@ class ClosedFormSurface:
         return out[0], out[1]
 
     def closest_parameters(self, point: ArrayLike, u0: float, v0: float) -> tuple[float, float]:
-        """(u, v) of the point of sigma nearest ``point``, by Gauss-Newton from (u0, v0)."""
+        """(u, v) of the point of sigma nearest ``point`` (3,), by Gauss-Newton from (u0, v0)."""
         return _project(self, np.asarray(point, float), u0, v0)
 
     def symmetric_image(self, point: ArrayLike, estimate: ArrayLike) -> Array:
@@ -175,7 +175,7 @@ def stack_columns(*columns: Parameter) -> Array:
 def outward_normal(
     surface: ClosedFormSurface, d: SigmaDerivatives, w: Array
 ) -> tuple[Array, Array]:
-    """Unit vector of ``w`` signed to agree with grad f at sigma, and the sign (..., 1)."""
+    """Unit vector of ``w`` (..., 3) signed to agree with grad f at sigma, and the sign (..., 1)."""
     g = surface.gradient(d.point.reshape(-1, 3)).reshape(d.point.shape)
     sign = np.where(np.sum(w * g, axis=-1, keepdims=True) < 0, -1.0, 1.0)
     norm = np.linalg.norm(w, axis=-1, keepdims=True)

@@ -23,7 +23,10 @@ PoseState = tuple[Array, Array, Array, Array, Array, NDArray[np.int64]]
 
 
 def exact_error_m(model: MeshModel, points: ArrayLike, R: ArrayLike, t: ArrayLike) -> float:
-    """Mean exact distance from the points moved by (R, t) to the model, thesis Eq. (4.8)."""
+    """Mean exact distance from the points moved by (R, t) to the model, thesis Eq. (4.8).
+
+    ``points`` (n, 3) and ``t`` (3,) in metres, ``R`` (3, 3); the result is in metres.
+    """
     moved = np.asarray(points, float) @ np.asarray(R).T + np.asarray(t)
     return float(np.mean(model.distance.closest(moved)[0]))
 
@@ -43,7 +46,8 @@ def refine_exact(
     never gets worse, also along the flat directions of nearly symmetric surfaces).
     Stops when a kept step lowers the mean squared distance by less than the fraction
     ``tolerance`` or moves no data point by more than 0.1 micrometre, or after
-    ``iterations`` steps. Returns R, t and the mean exact distance (4.8) at the result.
+    ``iterations`` steps. Returns R (3, 3), t (3,) and the mean exact distance (4.8) at
+    the result, metres; ``points`` (n, 3) and ``t`` in metres, ``R`` (3, 3).
     """
     points = np.asarray(points, float)
     reach = float(np.max(np.linalg.norm(points - points.mean(axis=0), axis=1)))
@@ -107,8 +111,8 @@ def with_exact_error(
     """``registration`` with its error computed exactly (if it was not).
 
     With ``refine``, the pose is first polished on exact closest points by at most
-    ``iterations`` steps of :func:`refine_exact`; ``point`` (the data's p) then moves
-    with it. The time taken is added to ``time_s``.
+    ``iterations`` steps of :func:`refine_exact`; ``point`` ((3,), metres: the data's p,
+    data frame) then moves with it. The time taken is added to ``time_s``.
     """
     if registration.error_is_exact or not np.isfinite(registration.error_m):
         return registration

@@ -65,9 +65,10 @@ def correspondence_error(
 ) -> float:
     """Mean distance between data points and their plane-section counterparts, Eq. (4.15).
 
-    ``R``, ``t`` move the data onto the model with p on ``anchor`` (a model vertex);
-    ``local_mesh`` (vertices, faces) is the part of the model around the anchor.
-    Infinite when a section through the anchor is too short for the data curve.
+    ``R`` (3, 3), ``t`` (3,) move the data onto the model with p on ``anchor`` (3,) (a
+    model vertex); ``local_mesh`` (vertices (m, 3), faces (f, 3)) is the part of the model
+    around the anchor; lengths in metres, the result too. Infinite when a section through
+    the anchor is too short for the data curve.
     """
     total, count = 0.0, 0
     for curve, (normal, spacing, middle) in zip(curves.curves, layout, strict=True):
