@@ -34,6 +34,7 @@ __all__ = [
     "LeastSquaresResult",
     "LeastSquaresStatus",
     "LinearSolve",
+    "State",
     "damped_least_squares",
 ]
 
@@ -146,11 +147,11 @@ class LeastSquaresResult:
     trace: Array
 
 
-def _take(state: State, rows: np.ndarray) -> State:
+def _take(state: State, rows: NDArray[np.intp]) -> State:
     return tuple(a[rows] for a in state)
 
 
-def _put(state: State, rows: np.ndarray, values: State) -> None:
+def _put(state: State, rows: NDArray[np.intp], values: State) -> None:
     for a, v in zip(state, values, strict=True):
         a[rows] = v
 
@@ -183,7 +184,7 @@ def _steps(
     g: Array,
     state: State,
     config: LeastSquaresConfig,
-    held: Callable[[State, Array], np.ndarray] | None,
+    held: Callable[[State, Array], NDArray[np.bool_]] | None,
 ) -> Array:
     """The damped Gauss-Newton steps; components ``held`` at a bound are kept fixed."""
     step = _solve(M, -g, config.solve)
@@ -207,7 +208,7 @@ def damped_least_squares(
     retract: Callable[[State, Array], State],
     config: LeastSquaresConfig = LeastSquaresConfig(),
     step_size: Callable[[State, Array], Array] | None = None,
-    held: Callable[[State, Array], np.ndarray] | None = None,
+    held: Callable[[State, Array], NDArray[np.bool_]] | None = None,
     monitor: Callable[[State], Array] | None = None,
 ) -> LeastSquaresResult:
     """Minimise each problem's cost by damped Gauss-Newton steps (module docstring).

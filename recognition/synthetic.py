@@ -10,11 +10,13 @@ ground truth is kept apart.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Protocol
 
 import numpy as np
 import trimesh
+from numpy.typing import ArrayLike, NDArray
 
 from recognition.errors import InvalidCurveData
 from recognition.rigid import random_rigid_motion
@@ -29,15 +31,17 @@ __all__ = [
     "sampling_plane_normals",
 ]
 
+Array = NDArray[np.float64]
+
 
 class ImplicitSurface(Protocol):
     """What :func:`implicit_data_curves` needs of a closed-form surface."""
 
-    def implicit(self, points: np.ndarray) -> np.ndarray:
-        """f(x) at (n, 3) points; the surface is f = 0."""
+    def implicit(self, points: Array) -> Array:
+        """f(x) at (n, 3) points, (n,); the surface is f = 0."""
 
-    def gradient(self, points: np.ndarray) -> np.ndarray:
-        """(n, 3) gradient of f."""
+    def gradient(self, points: Array) -> Array:
+        """(n, 3) gradient of f at (n, 3) points."""
 
 
 @dataclass(frozen=True)
@@ -61,14 +65,15 @@ class SyntheticCurves:
     """
 
     curves: DataCurves
-    point_in_model: np.ndarray
-    normal_in_model: np.ndarray
-    T_model_from_data: np.ndarray
-    clean_curves_in_model: tuple[np.ndarray, ...]
-    plane_normals_in_model: np.ndarray
+    point_in_model: Array
+    normal_in_model: Array
+    T_model_from_data: Array
+    clean_curves_in_model: tuple[Array, ...]
+    plane_normals_in_model: Array
 
 
-def _unit(v):
+def _unit(v: ArrayLike) -> Array:
+    """``v`` scaled to unit length (:class:`InvalidCurveData` for a zero vector)."""
     v = np.asarray(v, dtype=float)
     n = np.linalg.norm(v)
     if not n > 0:
@@ -77,14 +82,33 @@ def _unit(v):
 
 
 def sampling_plane_normals(
-    normal, first_direction=None, plane_angle_rad: float = np.pi / 3, count: int = 3
-) -> np.ndarray:
+    normal: ArrayLike,
+    first_direction: ArrayLike | None = None,
+    plane_angle_rad: float = np.pi / 3,
+    count: int = 3,
+) -> Array:
     """Normals of ``count`` planes that contain ``normal``, ``plane_angle_rad`` apart.
 
     The first plane contains ``first_direction`` (any tangent if omitted); plane k is
     the first rotated by ``k * plane_angle_rad`` about the surface normal. Planes that
     coincide (e.g. three planes 90 degrees apart: the first and the third) raise
     :class:`InvalidCurveData`.
+
+    Parameters
+    ----------
+    normal : (3,) float
+        The surface normal (any length but zero).
+    first_direction : (3,) float, optional
+        A direction in the first plane (its component along ``normal`` is dropped).
+    plane_angle_rad : float
+        Angle between consecutive planes about the normal, radians.
+    count : int
+        Number of planes.
+
+    Returns
+    -------
+    (count, 3) float
+        Unit normals of the planes.
     """
     angles = plane_angle_rad * np.arange(count)
     gap = np.abs(np.sin(angles[:, None] - angles[None, :])) + np.eye(count)
@@ -106,24 +130,37 @@ def sampling_plane_normals(
 
 
 def _finish(
-    clean_in_model, point, normal, planes, noise_std_m, rng, transform, translation_scale_m
+    clean_in_model: Sequence[Array],
+    point: ArrayLike,
+    normal: Array,
+    planes: ArrayLike,
+    noise_std_m: float,
+    rng: np.random.Generator | None,
+    transform: bool,
+    translation_scale_m: float,
 ) -> SyntheticCurves:
+    """Noise, the random data frame and the ground truth around clean model-frame curves."""
     if noise_std_m > 0 and rng is None:
         raise InvalidCurveData("noise_std_m > 0 needs an explicit numpy.random.Generator")
     if transform and rng is None:
         raise InvalidCurveData("a random transform needs an explicit numpy.random.Generator")
-    T_data_from_model = random_rigid_motion(rng, translation_scale_m) if transform else np.eye(4)
-    noisy = [
-        c + (rng.normal(scale=noise_std_m, size=c.shape) if noise_std_m > 0 else 0.0)
-        for c in clean_in_model
-    ]
+    if transform:
+        assert rng is not None  # checked above
+        T_data_from_model = random_rigid_motion(rng, translation_scale_m)
+    else:
+        T_data_from_model = np.eye(4)
+    if noise_std_m > 0:
+        assert rng is not None  # checked above
+        noisy = [c + rng.normal(scale=noise_std_m, size=c.shape) for c in clean_in_model]
+    else:
+        noisy = [c + 0.0 for c in clean_in_model]
     R, t = T_data_from_model[:3, :3], T_data_from_model[:3, 3]
     data = DataCurves(tuple(c @ R.T + t for c in noisy), approach=-(R @ normal))
     return SyntheticCurves(
         data,
         np.asarray(point, float),
         np.asarray(normal, float),
-        np.linalg.inv(T_data_from_model),
+        np.asarray(np.linalg.inv(T_data_from_model), dtype=np.float64),
         tuple(clean_in_model),
         np.asarray(planes, float),
     )
@@ -131,14 +168,14 @@ def _finish(
 
 def mesh_data_curves(
     mesh: trimesh.Trimesh,
-    point,
+    point: ArrayLike,
     *,
-    normal=None,
+    normal: ArrayLike | None = None,
     n_points: int = 81,
     spacing_m: float = 0.3e-3,
     plane_angle_deg: float = 60.0,
-    first_direction=None,
-    plane_normals=None,
+    first_direction: ArrayLike | None = None,
+    plane_normals: ArrayLike | None = None,
     noise_std_m: float = 0.02e-3,
     rng: np.random.Generator | None = None,
     transform: bool = True,
@@ -171,39 +208,40 @@ def mesh_data_curves(
         Move the curves to a random data frame.
     """
     if np.ndim(point) == 0:
-        vertex = int(point)
-        point = mesh.vertices[vertex]
+        vertex = int(np.asarray(point))
+        p: Array = mesh.vertices[vertex]
     else:
-        point = np.asarray(point, float)
-        vertex = int(mesh.kdtree.query(point)[1])
-    if normal is None:
-        normal = mesh.vertex_normals[vertex]
-    normal = _unit(normal)
+        p = np.asarray(point, float)
+        vertex = int(mesh.kdtree.query(p)[1])
+    unit_normal = _unit(mesh.vertex_normals[vertex] if normal is None else normal)
     if plane_normals is None:
         if first_direction is None and rng is not None:
             first_direction = rng.normal(size=3)
-        plane_normals = sampling_plane_normals(normal, first_direction, np.deg2rad(plane_angle_deg))
+        planes = sampling_plane_normals(unit_normal, first_direction, np.deg2rad(plane_angle_deg))
+    else:
+        planes = np.asarray(plane_normals, float)
     radius = 0.75 * spacing_m * (n_points - 1) + 5e-3
     clean = []
-    for m in plane_normals:
-        polyline = mesh_plane_section(mesh, point, _unit(m), radius=radius)
-        clean.append(resample_around(polyline, point, n_points, spacing_m))
-    return _finish(
-        clean, point, normal, plane_normals, noise_std_m, rng, transform, translation_scale_m
-    )
+    for m in planes:
+        polyline = mesh_plane_section(mesh, p, _unit(m), radius=radius)
+        clean.append(resample_around(polyline, p, n_points, spacing_m))
+    return _finish(clean, p, unit_normal, planes, noise_std_m, rng, transform, translation_scale_m)
 
 
-def _trace_implicit(surface, point, plane_normal, length, step):
+def _trace_implicit(
+    surface: ImplicitSurface, point: ArrayLike, plane_normal: Array, length: float, step: float
+) -> Array:
     """Points of {f = 0} ∩ plane from ``point`` over arc ``length`` (predictor-corrector)."""
 
-    def project(q):
+    def project(q: Array) -> Array:
+        """``q`` moved onto {f = 0} within the plane by Newton steps along grad f."""
         for _ in range(20):
             g = surface.gradient(q[None])[0]
             g = g - plane_normal * (g @ plane_normal)
             f = surface.implicit(q[None])[0]
             dq = f * g / (g @ g)
             q = q - dq
-            if np.linalg.norm(dq) < 1e-14 * max(1.0, np.linalg.norm(q)):
+            if np.linalg.norm(dq) < 1e-14 * max(1.0, float(np.linalg.norm(q))):
                 break
         return q
 
@@ -217,7 +255,7 @@ def _trace_implicit(surface, point, plane_normal, length, step):
             t = np.cross(plane_normal, g)
             t = sign * t / np.linalg.norm(t)
             q_new = project(q + step * t)
-            travelled += np.linalg.norm(q_new - q)
+            travelled += float(np.linalg.norm(q_new - q))
             pts.append(q_new)
             q = q_new
         branches.append(np.array(pts))
@@ -226,13 +264,13 @@ def _trace_implicit(surface, point, plane_normal, length, step):
 
 def implicit_data_curves(
     surface: ImplicitSurface,
-    point,
+    point: ArrayLike,
     *,
     n_points: int = 61,
     spacing: float = 0.01,
     plane_angle_deg: float = 60.0,
-    first_direction=None,
-    plane_normals=None,
+    first_direction: ArrayLike | None = None,
+    plane_normals: ArrayLike | None = None,
     noise_std: float = 0.0,
     rng: np.random.Generator | None = None,
     transform: bool = True,
@@ -244,18 +282,18 @@ def implicit_data_curves(
     normal is the normalised gradient of f at ``point``. The curves are traced with steps
     of ``spacing / 8`` and resampled at ``spacing``.
     """
-    point = np.asarray(point, float)
-    normal = _unit(surface.gradient(point[None])[0])
+    p = np.asarray(point, float)
+    normal = _unit(surface.gradient(p[None])[0])
     if plane_normals is None:
         if first_direction is None and rng is not None:
             first_direction = rng.normal(size=3)
-        plane_normals = sampling_plane_normals(normal, first_direction, np.deg2rad(plane_angle_deg))
+        planes = sampling_plane_normals(normal, first_direction, np.deg2rad(plane_angle_deg))
+    else:
+        planes = np.asarray(plane_normals, float)
     half = spacing * (n_points - 1) / 2.0
     clean = []
-    for m in plane_normals:
+    for m in planes:
         m = _unit(m)
-        polyline = _trace_implicit(surface, point, m, 1.05 * half + spacing, spacing / 8.0)
-        clean.append(resample_around(polyline, point, n_points, spacing))
-    return _finish(
-        clean, point, normal, plane_normals, noise_std, rng, transform, translation_scale
-    )
+        polyline = _trace_implicit(surface, p, m, 1.05 * half + spacing, spacing / 8.0)
+        clean.append(resample_around(polyline, p, n_points, spacing))
+    return _finish(clean, p, normal, planes, noise_std, rng, transform, translation_scale)

@@ -8,10 +8,13 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from recognition.errors import DegenerateGeometry, InvalidCurveData
 
 __all__ = ["DataCurves", "closest_points_between_polylines"]
+
+Array = NDArray[np.float64]
 
 #: Default largest gap (metres) between the curves at their common point.
 MEET_TOLERANCE_M = 1.0e-3
@@ -21,7 +24,7 @@ MIN_TANGENT_ANGLE = np.deg2rad(5.0)
 MIN_POINTS = 5
 
 
-def closest_points_between_polylines(a: np.ndarray, b: np.ndarray):
+def closest_points_between_polylines(a: Array, b: Array) -> tuple[Array, Array, float]:
     """Closest pair of points between two polylines.
 
     Parameters
@@ -34,6 +37,7 @@ def closest_points_between_polylines(a: np.ndarray, b: np.ndarray):
     point_a, point_b : (3,) float
         The closest points, on a segment of ``a`` and of ``b``.
     distance : float
+        Their distance, in the units of the points.
     """
     p0, d0 = a[:-1], np.diff(a, axis=0)  # (n-1, 3)
     q0, d1 = b[:-1], np.diff(b, axis=0)  # (k-1, 3)
@@ -79,13 +83,13 @@ class DataCurves:
     span a plane, two identical sampling planes).
     """
 
-    curves: tuple[np.ndarray, ...]
+    curves: tuple[Array, ...]
     meet_tolerance_m: float = MEET_TOLERANCE_M
-    approach: np.ndarray | None = None
-    intersection: np.ndarray = field(init=False, repr=False, compare=False)
+    approach: Array | None = None
+    intersection: Array = field(init=False, repr=False, compare=False)
     gap_m: float = field(init=False, repr=False, compare=False)
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         curves = tuple(self._validated(c, i) for i, c in enumerate(self.curves))
         if len(curves) < 3:
             raise InvalidCurveData(f"expected three data curves (or more), got {len(curves)}")
@@ -112,7 +116,7 @@ class DataCurves:
         self._check_tangents()
 
     @staticmethod
-    def _validated(curve, index: int) -> np.ndarray:
+    def _validated(curve: ArrayLike, index: int) -> Array:
         c = np.array(curve, dtype=float)
         if c.ndim != 2 or c.shape[1] != 3:
             raise InvalidCurveData(f"curve {index} must be an (n, 3) array, got shape {c.shape}")
@@ -130,7 +134,7 @@ class DataCurves:
         c.setflags(write=False)
         return c
 
-    def _check_tangents(self):
+    def _check_tangents(self) -> None:
         """Tangents at p must not be parallel; the sampling planes must differ."""
         tangents = [self.chord_direction(i) for i in range(len(self.curves))]
         normals = [self.plane_normal(i) for i in range(len(self.curves))]
@@ -151,30 +155,31 @@ class DataCurves:
                         f"{np.rad2deg(MIN_TANGENT_ANGLE):.0f} deg apart about the normal"
                     )
 
-    def chord_direction(self, index: int) -> np.ndarray:
-        """Unit chord direction of curve ``index`` across the two samples either side of p."""
+    def chord_direction(self, index: int) -> Array:
+        """(3,) unit chord direction of curve ``index`` across the two samples either side of p."""
         c = self.curves[index]
         i0 = int(np.argmin(np.linalg.norm(c - self.intersection, axis=1)))
         lo, hi = max(i0 - 2, 0), min(i0 + 2, c.shape[0] - 1)
         u = c[hi] - c[lo]
         return u / np.linalg.norm(u)
 
-    def plane_normal(self, index: int) -> np.ndarray:
-        """Unit normal of the best-fit plane of curve ``index`` (sign arbitrary)."""
+    def plane_normal(self, index: int) -> Array:
+        """(3,) unit normal of the best-fit plane of curve ``index`` (sign arbitrary)."""
         c = self.curves[index]
         return np.linalg.svd(c - c.mean(axis=0), full_matrices=False)[2][-1]
 
     @property
-    def points(self) -> np.ndarray:
+    def points(self) -> Array:
         """All data points stacked, (sum n_i, 3)."""
         return np.concatenate(self.curves)
 
     @property
     def n_points(self) -> int:
+        """Number of data points, all curves together."""
         return sum(c.shape[0] for c in self.curves)
 
-    def transformed(self, T: np.ndarray) -> DataCurves:
-        """The curves moved by a 4x4 rigid transform ``T``."""
+    def transformed(self, T: ArrayLike) -> DataCurves:
+        """The curves moved by a (4, 4) rigid transform ``T`` (translation in metres)."""
         T = np.asarray(T, dtype=float)
         approach = None if self.approach is None else T[:3, :3] @ self.approach
         return DataCurves(
@@ -183,7 +188,7 @@ class DataCurves:
             approach,
         )
 
-    def save(self, path) -> Path:
+    def save(self, path: str | os.PathLike[str]) -> Path:
         """Write the curves to ``path`` (.npz, no pickle), atomically."""
         path = Path(path)
         arrays = {f"curve_{i}": c for i, c in enumerate(self.curves)}
@@ -202,7 +207,7 @@ class DataCurves:
         return path
 
     @classmethod
-    def load(cls, path) -> DataCurves:
+    def load(cls, path: str | os.PathLike[str]) -> DataCurves:
         """Read curves written by :meth:`save`."""
         path = Path(path)
         try:

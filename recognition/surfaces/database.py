@@ -9,6 +9,7 @@ import time
 from collections.abc import Callable, Mapping
 from dataclasses import asdict
 from pathlib import Path
+from typing import Any, BinaryIO
 
 import numpy as np
 import trimesh
@@ -43,7 +44,8 @@ DATABASE_FORMAT = 4
 MAX_ERROR_M = 0.5e-3
 
 
-def _write_atomic(path: Path, writer: Callable) -> None:
+def _write_atomic(path: Path, writer: Callable[[BinaryIO], object]) -> None:
+    """Write ``path`` through ``writer`` into a temporary file, then rename it."""
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.name, suffix=".tmp")
     try:
@@ -86,6 +88,7 @@ class ModelDatabase:
 
     @property
     def names(self) -> list[str]:
+        """The model names, in database order."""
         return list(self.models)
 
     def prepare(self) -> ModelDatabase:
@@ -137,14 +140,14 @@ class ModelDatabase:
 
     # --- persistence ------------------------------------------------------------------
 
-    def save(self, directory) -> Path:
+    def save(self, directory: str | os.PathLike[str]) -> Path:
         """Write every model (mesh, table, distance field) as .npz and a JSON manifest.
 
         Files are written atomically; the manifest records each model's mesh hash and
         table settings so that :meth:`load` can refuse a stale or corrupt file.
         """
         directory = Path(directory)
-        models: dict[str, dict] = {}
+        models: dict[str, dict[str, Any]] = {}
         manifest: dict[str, object] = {"format": DATABASE_FORMAT, "models": models}
         for name, model in self.models.items():
             table, df, dense = model.table, model.distance_field, model.candidate_curvatures
@@ -167,7 +170,11 @@ class ModelDatabase:
                 "field_band": np.array(df.band),
                 "field_values": df.values,
             }
-            _write_atomic(directory / file, lambda f, a=arrays: np.savez_compressed(f, **a))
+
+            def write_arrays(f: BinaryIO, arrays: dict[str, np.ndarray] = arrays) -> None:
+                np.savez_compressed(f, allow_pickle=False, **arrays)
+
+            _write_atomic(directory / file, write_arrays)
             models[name] = {
                 "file": file,
                 "mesh_hash": model.hash,
@@ -183,7 +190,7 @@ class ModelDatabase:
     @classmethod
     def load(
         cls,
-        directory,
+        directory: str | os.PathLike[str],
         *,
         registration: MeshRegistrationConfig = FastConfig(),
         config: MeshModelConfig | None = None,
@@ -298,16 +305,19 @@ class ModelDatabase:
 
 
 def _safe(name: str) -> str:
+    """``name`` with every character but letters, digits, '-' and '_' replaced by '_'."""
     return "".join(ch if ch.isalnum() or ch in "-_" else "_" for ch in name)
 
 
-def _config_json(config: MeshModelConfig) -> dict:
+def _config_json(config: MeshModelConfig) -> dict[str, Any]:
+    """The config as JSON-ready values (the fit sizes as a list)."""
     d = asdict(config)
     d["fit_sizes"] = list(d["fit_sizes"])
     return d
 
 
-def _config_from_json(d: dict) -> dict:
+def _config_from_json(d: dict[str, Any]) -> dict[str, Any]:
+    """The keyword arguments of a :class:`MeshModelConfig` read back from JSON."""
     d = dict(d)
     d["fit_sizes"] = tuple(d["fit_sizes"])
     return d

@@ -11,18 +11,38 @@ fixed tolerances fail on sub-millimetre triangles at metre scale (DESIGN.md).
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
+from numpy.typing import ArrayLike, NDArray
 from scipy import ndimage
 from scipy.spatial import cKDTree
 
 __all__ = ["DistanceField", "MeshDistance", "closest_point_on_triangles"]
 
+Array = NDArray[np.float64]
+Array32 = NDArray[np.float32]
+IntArray = NDArray[np.int64]
+Mask = NDArray[np.bool_]
 
-def closest_point_on_triangles(p: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray):
-    """Closest points on triangles (a, b, c) to points p, all (..., 3) (Ericson, 5.1.5)."""
+
+def closest_point_on_triangles(p: Array, a: Array, b: Array, c: Array) -> Array:
+    """Closest points on triangles (a, b, c) to points p, all (..., 3) (Ericson, 5.1.5).
+
+    Parameters
+    ----------
+    p : (..., 3) float
+        The points, metres.
+    a, b, c : (..., 3) float
+        The triangles' corners, metres (broadcast against ``p``).
+
+    Returns
+    -------
+    (..., 3) float
+        The closest point of each triangle, metres.
+    """
     ab, ac, ap = b - a, c - a, p - a
     d1 = np.einsum("...i,...i", ab, ap)
     d2 = np.einsum("...i,...i", ac, ap)
@@ -69,7 +89,9 @@ class MeshDistance:
         Nearest vertices whose incident triangles are searched.
     """
 
-    def __init__(self, vertices, faces, tree: cKDTree | None = None, k: int = 6):
+    def __init__(
+        self, vertices: ArrayLike, faces: ArrayLike, tree: cKDTree | None = None, k: int = 6
+    ) -> None:
         self.vertices = np.asarray(vertices, float)
         self.faces = np.asarray(faces, np.int64)
         self.tree = tree or cKDTree(self.vertices)
@@ -83,15 +105,22 @@ class MeshDistance:
         fn = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
         self.face_normals = fn / np.maximum(np.linalg.norm(fn, axis=1, keepdims=True), 1e-300)
 
-    def closest(self, points: np.ndarray):
+    def closest(self, points: ArrayLike) -> tuple[Array, Array, IntArray]:
         """Closest points on the mesh.
+
+        Parameters
+        ----------
+        points : (m, 3) float
+            Query points near the surface, metres.
 
         Returns
         -------
         distance : (m,) float
-            Unsigned distance.
+            Unsigned distance, metres.
         closest : (m, 3) float
+            The closest point on the mesh, metres.
         face : (m,) int
+            The face it lies on.
         """
         p = np.asarray(points, float).reshape(-1, 3)
         m = len(p)
@@ -114,8 +143,19 @@ class MeshDistance:
         first = order[np.searchsorted(point[order], np.arange(m))]
         return np.sqrt(d2[first]), q[first], face[first]
 
-    def signed(self, points: np.ndarray) -> np.ndarray:
-        """Signed distance (positive outside), sign from the closest face's normal."""
+    def signed(self, points: ArrayLike) -> Array:
+        """Signed distance (positive outside), sign from the closest face's normal.
+
+        Parameters
+        ----------
+        points : (m, 3) float
+            Query points near the surface, metres.
+
+        Returns
+        -------
+        (m,) float
+            Signed distance, metres.
+        """
         d, q, f = self.closest(points)
         side = np.einsum(
             "ij,ij->i", np.asarray(points, float).reshape(-1, 3) - q, self.face_normals[f]
@@ -139,20 +179,39 @@ class DistanceField:
         Half width of the band, metres.
     """
 
-    origin: np.ndarray
+    origin: Array
     voxel: float
-    values: np.ndarray
+    values: Array32
     band: float
 
     @classmethod
     def build(
-        cls, vertices, normals, faces, voxel: float, band: float, tree: cKDTree | None = None
+        cls,
+        vertices: ArrayLike,
+        normals: Array,
+        faces: ArrayLike,
+        voxel: float,
+        band: float,
+        tree: cKDTree | None = None,
     ) -> DistanceField:
         """Sample the signed distance in a band of half width ``band`` around the surface.
 
         In the band, the distance is the point-to-plane distance to the nearest vertex
         (error about kappa r^2 / 2 for vertex spacing r). Beyond it, voxels outside the
         surface (connected to the grid's boundary) hold ``+band``, inside ``-band``.
+
+        Parameters
+        ----------
+        vertices : (n, 3) float
+            Vertex positions, metres.
+        normals : (n, 3) float
+            Outward unit vertex normals.
+        faces : (f, 3) int
+            Triangles, indices into ``vertices``.
+        voxel, band : float
+            Voxel size and half width of the band, metres.
+        tree : cKDTree, optional
+            KD-tree of the vertices.
         """
         vertices = np.asarray(vertices, float)
         tree = tree or cKDTree(vertices)
@@ -186,7 +245,8 @@ class DistanceField:
         values[~in_band] = np.where(outside[~in_band], band, -band)
         return cls(origin, float(voxel), values, float(band))
 
-    def _cell(self, points):
+    def _cell(self, points: ArrayLike) -> tuple[IntArray, Array, Mask]:
+        """Lower corner voxel (..., 3), fractions (..., 3) and the off-grid mask of points."""
         g = (np.asarray(points, float) - self.origin) / self.voxel
         shape = np.array(self.values.shape)
         outside = np.any((g < 0) | (g > shape - 1), axis=-1)
@@ -194,11 +254,21 @@ class DistanceField:
         i = np.floor(g).astype(np.int64)
         return i, g - i, outside
 
-    def nearest(self, points: np.ndarray) -> np.ndarray:
+    def nearest(self, points: ArrayLike) -> Array32:
         """Signed distance of the nearest voxel centre (no interpolation; +band off the grid).
 
         Eight times cheaper than :meth:`__call__`, accurate to about half a voxel: for
         screening many poses.
+
+        Parameters
+        ----------
+        points : (..., 3) float
+            Query points, metres.
+
+        Returns
+        -------
+        (...,) float32
+            Signed distance, metres.
         """
         g = np.rint((np.asarray(points, float) - self.origin) / self.voxel).astype(np.int64)
         shape = self.values.shape
@@ -207,7 +277,7 @@ class DistanceField:
         flat = (g[..., 0] * shape[1] + g[..., 1]) * shape[2] + g[..., 2]
         return np.where(inside, self.values.ravel()[flat], self.band)
 
-    def __call__(self, points: np.ndarray) -> np.ndarray:
+    def __call__(self, points: ArrayLike) -> Array:
         """Trilinearly interpolated signed distance at (..., 3) points (+band off the grid)."""
         i, f, outside = self._cell(points)
         v = self.values
@@ -220,8 +290,9 @@ class DistanceField:
         out = (c00 * (1 - fy) + c10 * fy) * (1 - fz) + (c01 * (1 - fy) + c11 * fy) * fz
         return np.where(outside, self.band, out)
 
-    def value_and_gradient(self, points: np.ndarray):
-        """Interpolated signed distance (...,) and its gradient (..., 3)."""
+    def value_and_gradient(self, points: ArrayLike) -> tuple[Array, Array]:
+        """Interpolated signed distance (...,), metres, and its gradient (..., 3) at (..., 3)
+        points, metres (off the grid: ``+band`` and a zero gradient)."""
         i, f, outside = self._cell(points)
         shape = self.values.shape
         flat = (i[..., 0] * shape[1] + i[..., 1]) * shape[2] + i[..., 2]
@@ -288,15 +359,15 @@ class FieldStack:
         Half width of each field's band, metres (the value far from the surface).
     """
 
-    values: np.ndarray
-    offset: np.ndarray
-    shape: np.ndarray
-    origin: np.ndarray
-    voxel: np.ndarray
-    band: np.ndarray
+    values: Array32
+    offset: IntArray
+    shape: IntArray
+    origin: Array
+    voxel: Array
+    band: Array
 
     @classmethod
-    def of(cls, fields) -> FieldStack:
+    def of(cls, fields: Iterable[DistanceField]) -> FieldStack:
         """The stack of ``fields`` (a sequence of :class:`DistanceField`), in order."""
         fields = list(fields)
         sizes = [f.values.size for f in fields]
@@ -314,7 +385,9 @@ class FieldStack:
     def __len__(self) -> int:
         return len(self.offset)
 
-    def nearest_in_frames(self, which, frames, origins, local, paired=False) -> np.ndarray:
+    def nearest_in_frames(
+        self, which: ArrayLike, frames: Array, origins: Array, local: Array, paired: bool = False
+    ) -> Array32:
         """Signed distance at the nearest voxel centre of points placed by many frames.
 
         Point ``j`` of pattern ``f`` placed at frame ``c`` is ``origins[c] + frames[c] @
@@ -359,7 +432,9 @@ class FieldStack:
         values = np.take(self.values, flat)
         return values if paired else values.reshape(len(which), *local.shape[:2])
 
-    def _cells(self, points, which):
+    def _cells(
+        self, points: Array, which: ArrayLike
+    ) -> tuple[IntArray, Array32, IntArray, IntArray, Mask]:
         """Lower corner (flat index), fractions, strides and the off-grid mask of points."""
         which = np.asarray(which, dtype=np.int64)
         g = (points - self.origin[which][:, None, :]) / self.voxel[which][:, None, None]
@@ -373,8 +448,9 @@ class FieldStack:
         flat = i[..., 0] * sx + i[..., 1] * sz + i[..., 2] + self.offset[which][:, None]
         return flat, frac, sx, sz, outside
 
-    def __call__(self, points: np.ndarray, which) -> np.ndarray:
-        """Trilinearly interpolated signed distance at points (B, P, 3) in fields which (B,)."""
+    def __call__(self, points: Array, which: ArrayLike) -> Array:
+        """Trilinearly interpolated signed distance (B, P) at points (B, P, 3) in fields
+        ``which`` (B,), metres (``+band`` off a grid)."""
         flat, f, sx, sz, outside = self._cells(points, which)
         v = self.values
         fx, fy, fz = f[..., 0], f[..., 1], f[..., 2]
@@ -388,7 +464,7 @@ class FieldStack:
         band = self.band[np.asarray(which, dtype=np.int64)][:, None]
         return np.where(outside, band, out)
 
-    def value_and_gradient(self, points: np.ndarray, which):
+    def value_and_gradient(self, points: Array, which: ArrayLike) -> tuple[Array, Array]:
         """Interpolated signed distance (B, P) and its gradient (B, P, 3) at points (B, P, 3)
         in fields ``which`` (B,); off a grid: ``+band`` and a zero gradient."""
         which = np.asarray(which, dtype=np.int64)

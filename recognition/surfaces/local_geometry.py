@@ -10,6 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from recognition.errors import DegenerateGeometry
 from recognition.surfaces.data_curves import DataCurves
@@ -24,6 +25,8 @@ __all__ = [
     "principal_curvatures_thesis",
     "surface_normal",
 ]
+
+Array = NDArray[np.float64]
 
 #: Default half length (metres) of the arc around p used by the curve fits.
 FIT_HALF_LENGTH_M = 4.5e-3
@@ -49,11 +52,11 @@ class CurveFrame:
         Unit normal of the sampling plane.
     """
 
-    point: np.ndarray
-    tangent: np.ndarray
-    normal: np.ndarray
+    point: Array
+    tangent: Array
+    normal: Array
     curvature: float
-    plane_normal: np.ndarray
+    plane_normal: Array
 
 
 @dataclass(frozen=True)
@@ -77,14 +80,14 @@ class LocalSurfaceGeometry:
         True when the normal's sign came from the data's approach direction.
     """
 
-    point: np.ndarray
-    normal: np.ndarray
+    point: Array
+    normal: Array
     k1: float
     k2: float
-    d1: np.ndarray
-    d2: np.ndarray
+    d1: Array
+    d2: Array
     frames: tuple[CurveFrame, ...]
-    normal_curvatures: np.ndarray
+    normal_curvatures: Array
     oriented: bool
 
     def flipped(self) -> LocalSurfaceGeometry:
@@ -102,20 +105,21 @@ class LocalSurfaceGeometry:
         )
 
     @property
-    def frame(self) -> np.ndarray:
+    def frame(self) -> Array:
         """(3, 3) rotation whose columns are (d1, d2, N): the local frame at p."""
         return np.column_stack([self.d1, self.d2, self.normal])
 
 
-def _plane_fit(points: np.ndarray):
+def _plane_fit(points: Array) -> tuple[Array, Array]:
+    """Centroid (3,) and the (3, 3) right singular vectors of the centred points."""
     centroid = points.mean(axis=0)
     _, _, vt = np.linalg.svd(points - centroid, full_matrices=False)
     return centroid, vt  # rows: two in-plane directions, then the plane normal
 
 
 def curve_frame_at(
-    curve: np.ndarray,
-    p: np.ndarray,
+    curve: Array,
+    p: Array,
     *,
     half_length_m: float = FIT_HALF_LENGTH_M,
     degree: int = FIT_DEGREE,
@@ -126,6 +130,17 @@ def curve_frame_at(
     thesis uses a quadratic) is fitted over the points within ``half_length_m`` of p,
     in a frame whose x axis is the local chord; tangent, normal and curvature come from
     its derivatives at the abscissa of p.
+
+    Parameters
+    ----------
+    curve : (n, 3) float
+        Ordered points of the data curve, metres.
+    p : (3,) float
+        The common point of the data curves, metres.
+    half_length_m : float
+        Points within this distance of p are fitted, metres.
+    degree : int
+        Degree of the fitted polynomial.
     """
     _, vt = _plane_fit(curve)
     plane_normal = vt[2]
@@ -159,32 +174,45 @@ def curve_frame_at(
     return CurveFrame(p + y0 * ey, tangent, normal, float(abs(kappa_signed)), plane_normal)
 
 
-def surface_normal(tangents: np.ndarray) -> np.ndarray:
+def surface_normal(tangents: ArrayLike) -> Array:
     """Unit N minimising sum_i (N . T_i)^2, thesis Eq. (4.1) (sign arbitrary).
 
     The minimiser is the eigenvector of ``sum_i T_i T_i^T`` of least eigenvalue.
+
+    Parameters
+    ----------
+    tangents : (k, 3) float
+        Unit tangents T_i of the data curves at p.
+
+    Returns
+    -------
+    (3,) float
+        The unit normal N.
     """
     T = np.asarray(tangents, dtype=float)
     _, v = np.linalg.eigh(T.T @ T)
     return v[:, 0]
 
 
-def normal_curvature(frame: CurveFrame, normal: np.ndarray) -> float:
+def normal_curvature(frame: CurveFrame, normal: Array) -> float:
     """Normal curvature along a curve's tangent: -kappa (N_c . N), Meusnier's theorem.
 
     The thesis writes kappa (N_c . N) with N on the side the curve bends towards; with the
     outward normal the sign flips so that convex surfaces have positive curvature.
+    ``normal`` is the (3,) unit surface normal; the result is in 1/m.
     """
     return float(-frame.curvature * (frame.normal @ normal))
 
 
-def principal_curvatures_thesis(kn_alpha, kn_beta, kn_gamma, theta1, theta2):
+def principal_curvatures_thesis(
+    kn_alpha: float, kn_beta: float, kn_gamma: float, theta1: float, theta2: float
+) -> tuple[float, float, float]:
     """k1, k2 and theta from three normal curvatures, thesis Eqs. (4.2)-(4.6).
 
     ``theta1``, ``theta2`` are the angles from T_alpha to T_beta and T_gamma in the
-    tangent plane; theta is the angle from T_alpha to the first principal direction.
-    Returns ``(k1, k2, theta)`` in the thesis's order (k1 is the curvature along theta,
-    not necessarily the larger one).
+    tangent plane; theta is the angle from T_alpha to the first principal direction
+    (angles in radians, curvatures in 1/m). Returns ``(k1, k2, theta)`` in the thesis's
+    order (k1 is the curvature along theta, not necessarily the larger one).
     """
     ratio = ((kn_alpha - kn_beta) * np.sin(theta2)) / ((kn_alpha - kn_gamma) * np.sin(theta1))
     theta = (np.arctan(np.sin(theta1 - theta2) / (ratio - np.cos(theta1 - theta2))) - theta2) / 2
@@ -196,19 +224,28 @@ def principal_curvatures_thesis(kn_alpha, kn_beta, kn_gamma, theta1, theta2):
     return float(k1), float(k2), float(theta)
 
 
-def principal_curvatures_from_normal_curvatures(normal_curvatures, angles):
+def principal_curvatures_from_normal_curvatures(
+    normal_curvatures: ArrayLike, angles: ArrayLike
+) -> tuple[float, float, float, float]:
     """Second fundamental form from k >= 3 normal curvatures by least squares (Euler).
 
     ``kn_i = L cos^2(a_i) + 2 M sin(a_i) cos(a_i) + N sin^2(a_i)`` for tangent directions
     at angles ``a_i`` in the tangent plane. With three curves this is the exact solve of
     (4.2)-(4.4); with more it is their least-squares solution.
 
+    Parameters
+    ----------
+    normal_curvatures : (k,) float
+        Normal curvatures kn_i, 1/m.
+    angles : (k,) float
+        Angles a_i of the tangent directions in the tangent plane, radians.
+
     Returns
     -------
     k1, k2 : float
-        Eigenvalues of [[L, M], [M, N]], k1 >= k2.
+        Eigenvalues of [[L, M], [M, N]], k1 >= k2, 1/m.
     angle1 : float
-        Angle of the k1 direction.
+        Angle of the k1 direction, radians.
     condition : float
         Condition number of the linear system (large: directions too close together).
     """
@@ -225,12 +262,12 @@ def local_surface_geometry(
     *,
     half_length_m: float = FIT_HALF_LENGTH_M,
     degree: int = FIT_DEGREE,
-    point: np.ndarray | None = None,
+    point: ArrayLike | None = None,
 ) -> LocalSurfaceGeometry:
     """Normal (4.1) and principal curvatures (4.2)-(4.6) at the curves' common point.
 
-    ``point`` (default ``curves.intersection``) is where the curves are fitted and the
-    geometry evaluated.
+    ``point`` ((3,), metres; default ``curves.intersection``) is where the curves are
+    fitted and the geometry evaluated.
 
     With ``curves.approach`` the normal points against the approach (out of the object);
     otherwise it is oriented so that the mean normal curvature is positive (the data are
@@ -242,9 +279,10 @@ def local_surface_geometry(
     )
     tangents = np.array([f.tangent for f in frames])
     normal = surface_normal(tangents)
-    oriented = curves.approach is not None
-    if oriented:
-        normal = -normal if normal @ curves.approach > 0 else normal
+    approach = curves.approach
+    oriented = approach is not None
+    if approach is not None:
+        normal = -normal if normal @ approach > 0 else normal
     kn = np.array([normal_curvature(f, normal) for f in frames])
     if not oriented and kn.mean() < 0:
         normal, kn = -normal, -kn

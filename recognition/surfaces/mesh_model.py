@@ -12,11 +12,13 @@ object, convex regions have positive curvature, k1 >= k2.
 from __future__ import annotations
 
 import hashlib
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
 import trimesh
+from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import cKDTree
 
 from recognition.errors import InvalidModel
@@ -32,6 +34,9 @@ __all__ = [
     "validate_mesh",
     "vertex_normals",
 ]
+
+Array = NDArray[np.float64]
+IntArray = NDArray[np.int64]
 
 #: Largest plausible bounding-box diagonal of a model in metres (a mm mesh read as m
 #: is 1000 times too large).
@@ -76,8 +81,8 @@ class MeshModelConfig:
     band_m: float = 3.0e-3
 
 
-def mesh_hash(vertices: np.ndarray, faces: np.ndarray) -> str:
-    """SHA-256 of the vertex and face arrays (float64 / int64, C order)."""
+def mesh_hash(vertices: ArrayLike, faces: ArrayLike) -> str:
+    """SHA-256 of the vertex (n, 3) and face (f, 3) arrays (float64 / int64, C order)."""
     h = hashlib.sha256()
     h.update(np.ascontiguousarray(vertices, dtype=np.float64).tobytes())
     h.update(np.ascontiguousarray(faces, dtype=np.int64).tobytes())
@@ -145,8 +150,21 @@ def validate_mesh(mesh: trimesh.Trimesh, name: str = "mesh") -> trimesh.Trimesh:
     return m
 
 
-def vertex_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
-    """Unit vertex normals: the normalised sum of the incident triangles' unit normals (4.13)."""
+def vertex_normals(vertices: Array, faces: IntArray) -> Array:
+    """Unit vertex normals: the normalised sum of the incident triangles' unit normals (4.13).
+
+    Parameters
+    ----------
+    vertices : (n, 3) float
+        Vertex positions, metres.
+    faces : (f, 3) int
+        Triangles, indices into ``vertices``.
+
+    Returns
+    -------
+    (n, 3) float
+        Unit vertex normals.
+    """
     fn = _face_normals(vertices, faces)
     owner = faces.ravel()
     n = np.stack(
@@ -159,7 +177,8 @@ def vertex_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     return n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
 
 
-def _face_normals(vertices, faces):
+def _face_normals(vertices: Array, faces: IntArray) -> Array:
+    """(f, 3) unit normals of the triangles (right-hand rule on the face's vertex order)."""
     a, b, c = vertices[faces[:, 0]], vertices[faces[:, 1]], vertices[faces[:, 2]]
     u, v = b - a, c - a
     fn = np.column_stack(
@@ -172,7 +191,7 @@ def _face_normals(vertices, faces):
     return fn / np.maximum(np.linalg.norm(fn, axis=1, keepdims=True), 1e-300)
 
 
-def _adjacency(n_vertices: int, faces: np.ndarray):
+def _adjacency(n_vertices: int, faces: IntArray) -> tuple[sp.csr_matrix, sp.csr_matrix]:
     """Vertex adjacency (CSR) and vertex-to-face incidence (CSR)."""
     e = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
     A = sp.coo_matrix((np.ones(len(e), bool), (e[:, 0], e[:, 1])), (n_vertices,) * 2)
@@ -183,7 +202,7 @@ def _adjacency(n_vertices: int, faces: np.ndarray):
     return A, VF
 
 
-def _padded_rows(M: sp.csr_matrix) -> np.ndarray:
+def _padded_rows(M: sp.csr_matrix) -> IntArray:
     """The column indices of each CSR row in a (rows, max_row_length) array, -1 padded."""
     counts = np.diff(M.indptr)
     out = np.full((M.shape[0], max(int(counts.max(initial=0)), 1)), -1, np.int64)
@@ -192,18 +211,18 @@ def _padded_rows(M: sp.csr_matrix) -> np.ndarray:
     return out
 
 
-def _gather(padded: np.ndarray, rows: np.ndarray) -> np.ndarray:
+def _gather(padded: IntArray, rows: IntArray) -> IntArray:
     """Concatenated rows of a padded index table, padding dropped."""
     out = padded[rows].ravel()
     return out[out >= 0]
 
 
 def adaptive_sample(
-    vertices: np.ndarray,
-    faces: np.ndarray,
-    normals: np.ndarray,
+    vertices: Array,
+    faces: IntArray,
+    normals: Array,
     config: MeshModelConfig = MeshModelConfig(),
-) -> np.ndarray:
+) -> IntArray:
     """Vertices sampled densely where the normal turns fast (thesis Section 4.3.2.1).
 
     Vertices are visited in a seeded random order. For an unmarked vertex v the ring
@@ -213,6 +232,21 @@ def adaptive_sample(
     when ``marked_fraction`` of the vertices are marked (or every vertex was visited).
     Rings come from the mesh's sparse adjacency matrix; since N always contains the
     2-ring, a vertex with a marked vertex in its 2-ring is skipped at once.
+
+    Parameters
+    ----------
+    vertices : (n, 3) float
+        Vertex positions, metres.
+    faces : (f, 3) int
+        Triangles, indices into ``vertices``.
+    normals : (n, 3) float
+        Unit vertex normals (4.13).
+    config : MeshModelConfig
+
+    Returns
+    -------
+    (m,) int64
+        The sampled vertices, in the order they were sampled.
     """
     n = len(vertices)
     A, VF = _adjacency(n, faces)
@@ -265,7 +299,7 @@ def adaptive_sample(
     return np.array(samples, dtype=np.int64)
 
 
-def _tangent_basis(normals: np.ndarray):
+def _tangent_basis(normals: Array) -> tuple[Array, Array]:
     """Two unit tangents per normal, (m, 3) each, right-handed with the normal."""
     helper = np.where(np.abs(normals[:, [0]]) < 0.9, [[1.0, 0, 0]], [[0, 1.0, 0]])
     e1 = np.cross(normals, helper)
@@ -274,12 +308,12 @@ def _tangent_basis(normals: np.ndarray):
 
 
 def paraboloid_curvatures(
-    vertices: np.ndarray,
-    normals: np.ndarray,
-    sample: np.ndarray,
-    fit_sizes=(30, 40, 50, 60, 70),
+    vertices: Array,
+    normals: Array,
+    sample: IntArray,
+    fit_sizes: Sequence[int] = (30, 40, 50, 60, 70),
     tree: cKDTree | None = None,
-):
+) -> tuple[Array, Array, Array]:
     """Principal curvatures at sampled vertices by paraboloid fits, thesis Eq. (4.14).
 
     ``z = a x^2 + b x y + c y^2 + d x + e y + f`` is fitted in the local frame (two
@@ -288,6 +322,19 @@ def paraboloid_curvatures(
     of the graph at the origin); k1 and k2 are the medians over the fits, chosen
     independently (thesis). Neighbours whose normal faces away from the sample's (the
     other side of a thin part) are left out.
+
+    Parameters
+    ----------
+    vertices : (n, 3) float
+        Vertex positions, metres.
+    normals : (n, 3) float
+        Unit vertex normals (4.13).
+    sample : (m,) int
+        The vertices at which the curvatures are fitted.
+    fit_sizes : sequence of int
+        Neighbourhood sizes of the fits.
+    tree : cKDTree, optional
+        KD-tree of the vertices.
 
     Returns
     -------
@@ -378,8 +425,8 @@ class MeshModel:
         distance_field: DistanceField | None = None,
         validate: bool = True,
         candidate_curvatures: CurvatureTable | None = None,
-        normals: np.ndarray | None = None,
-    ):
+        normals: ArrayLike | None = None,
+    ) -> None:
         self.name = name
         self.config = config
         self.mesh = validate_mesh(mesh, name) if validate else mesh
@@ -394,7 +441,7 @@ class MeshModel:
         self._field = distance_field
         self._distance: MeshDistance | None = None
         self._tree: cKDTree | None = None
-        self._cell_keys: dict[float, np.ndarray] = {}
+        self._cell_keys: dict[float, IntArray] = {}
         self.timings: dict[str, float] = {}
 
     @property
@@ -471,8 +518,8 @@ class MeshModel:
             self._distance = MeshDistance(self.vertices, self.faces, self.tree)
         return self._distance
 
-    def cell_keys(self, spacing: float) -> np.ndarray:
-        """(n,) int64 key of the cubic cell of side ``spacing`` holding each vertex (cached)."""
+    def cell_keys(self, spacing: float) -> IntArray:
+        """(n,) int64 key of the cubic cell (side ``spacing``, metres) of each vertex (cached)."""
         keys = self._cell_keys.get(spacing)
         if keys is None:
             cell = np.floor((self.vertices - self.vertices.min(0)) / spacing).astype(np.int64)

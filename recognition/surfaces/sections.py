@@ -9,17 +9,37 @@ from __future__ import annotations
 
 import numpy as np
 import trimesh
+from numpy.typing import ArrayLike, NDArray
 
 from recognition.errors import DegenerateGeometry
 
 __all__ = ["local_submesh", "mesh_plane_section", "plane_section_polyline", "resample_around"]
 
+Array = NDArray[np.float64]
+IntArray = NDArray[np.int64]
 
-def resample_around(polyline: np.ndarray, point: np.ndarray, n_points: int, spacing: float):
+
+def resample_around(polyline: Array, point: Array, n_points: int, spacing: float) -> Array:
     """``n_points`` at arc-length ``spacing`` along a polyline, ``point`` in the middle.
 
     The polyline is ordered; ``point`` is projected onto it. Raises
     :class:`DegenerateGeometry` when the polyline ends before the samples do.
+
+    Parameters
+    ----------
+    polyline : (m, 3) float
+        Ordered points, metres (or the surface's units).
+    point : (3,) float
+        The point that becomes the middle sample, same units.
+    n_points : int
+        Number of samples.
+    spacing : float
+        Arc length between consecutive samples, same units.
+
+    Returns
+    -------
+    (n_points, 3) float
+        The samples, in the polyline's order.
     """
     seg = np.diff(polyline, axis=0)
     seg_len = np.linalg.norm(seg, axis=1)
@@ -43,8 +63,8 @@ def resample_around(polyline: np.ndarray, point: np.ndarray, n_points: int, spac
 
 
 def plane_section_polyline(
-    vertices: np.ndarray, faces: np.ndarray, point: np.ndarray, plane_normal: np.ndarray
-) -> np.ndarray:
+    vertices: Array, faces: IntArray, point: Array, plane_normal: ArrayLike
+) -> Array:
     """The plane section through ``point`` of a triangle set, as an ordered polyline.
 
     Each section point lies on a mesh edge crossed by the plane and is keyed by that
@@ -53,6 +73,22 @@ def plane_section_polyline(
     section is returned as an open loop. Signed distances are taken for every vertex
     given: pass a compact local mesh (see :func:`local_submesh`) when cutting a small
     region of a large one.
+
+    Parameters
+    ----------
+    vertices : (n, 3) float
+        Vertex positions, metres.
+    faces : (f, 3) int
+        Triangles, indices into ``vertices``.
+    point : (3,) float
+        A point of the plane, metres.
+    plane_normal : (3,) float
+        Unit normal of the plane.
+
+    Returns
+    -------
+    (m, 3) float
+        The section's points, metres, in walking order.
     """
     n = np.asarray(plane_normal, float)
     d = vertices @ n - point @ n
@@ -97,7 +133,7 @@ def plane_section_polyline(
     used[first] = True
     link_l, seg_l = link.tolist(), seg.tolist()
 
-    def walk(node):
+    def walk(node: int) -> list[int]:
         path = [node]
         while True:
             s0, s1 = link_l[node]
@@ -115,23 +151,56 @@ def plane_section_polyline(
     return position[backward[::-1] + forward]
 
 
-def local_submesh(vertices: np.ndarray, faces: np.ndarray, face_ids: np.ndarray):
-    """The faces ``face_ids`` as a compact mesh: (local vertices, reindexed faces)."""
+def local_submesh(vertices: Array, faces: IntArray, face_ids: IntArray) -> tuple[Array, IntArray]:
+    """The faces ``face_ids`` as a compact mesh: (local vertices, reindexed faces).
+
+    Parameters
+    ----------
+    vertices : (n, 3) float
+    faces : (f, 3) int
+    face_ids : (k,) int
+        The faces to keep.
+
+    Returns
+    -------
+    vertices : (m, 3) float
+        The vertices the kept faces use, in index order.
+    faces : (k, 3) int
+        The kept faces, indexing the returned vertices.
+    """
     used, inverse = np.unique(faces[face_ids], return_inverse=True)
     return vertices[used], inverse.reshape(-1, 3)
 
 
 def mesh_plane_section(
     mesh: trimesh.Trimesh,
-    point: np.ndarray,
-    plane_normal: np.ndarray,
+    point: Array,
+    plane_normal: ArrayLike,
     radius: float | None = None,
-    local_faces: np.ndarray | None = None,
-) -> np.ndarray:
+    local_faces: IntArray | None = None,
+) -> Array:
     """The connected plane section of ``mesh`` through ``point``, as an ordered polyline.
 
     Only faces within ``radius`` of ``point`` (or the given ``local_faces``) are
     intersected (a closed section is then cut into an open arc through the point).
+
+    Parameters
+    ----------
+    mesh : trimesh.Trimesh
+        The surface, metres.
+    point : (3,) float
+        A point of the plane, metres.
+    plane_normal : (3,) float
+        Unit normal of the plane.
+    radius : float, optional
+        Faces whose centre lies within this distance of ``point`` are cut, metres.
+    local_faces : (k,) int, optional
+        The faces to cut (instead of ``radius``).
+
+    Returns
+    -------
+    (m, 3) float
+        The section's points, metres, in walking order.
     """
     vertices, faces = np.asarray(mesh.vertices), np.asarray(mesh.faces)
     if local_faces is None and radius is not None:

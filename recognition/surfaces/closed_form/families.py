@@ -31,7 +31,7 @@ __all__ = [
 ]
 
 Array = NDArray[np.float64]
-Height = Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, ...]]
+Height = Callable[[Array, Array], tuple[Array, ...]]
 
 
 def _positive(name: str, **values: float) -> dict[str, float]:
@@ -50,13 +50,13 @@ def _rotations_about(axis: int, count: int) -> tuple[Array, ...]:
 
 
 def _quadric_terms(
-    scales: np.ndarray, offset: float, linear_z: float = 0.0
-) -> Callable[[np.ndarray, int], ImplicitTerms]:
+    scales: Array, offset: float, linear_z: float = 0.0
+) -> Callable[[Array, int], ImplicitTerms]:
     """f = sum_i s_i x_i^2 - offset - linear_z z, with its gradient and Hessian."""
 
     hessian = np.diag(2.0 * scales)
 
-    def terms(points: np.ndarray, order: int = 2) -> ImplicitTerms:
+    def terms(points: Array, order: int = 2) -> ImplicitTerms:
         f = (points * points) @ scales - offset
         if linear_z:
             f -= linear_z * points[:, 2]
@@ -81,7 +81,7 @@ def ellipsoid(
     p = _positive(name, a=a, b=b, c=c)
     a, b, c = p["a"], p["b"], p["c"]
 
-    def sigma_terms(u: np.ndarray, v: np.ndarray) -> SigmaDerivatives:
+    def sigma_terms(u: Array, v: Array) -> SigmaDerivatives:
         cu, su_, cv, sv_ = np.cos(u), np.sin(u), np.cos(v), np.sin(v)
         z = np.zeros(np.broadcast_shapes(np.shape(u), np.shape(v)))
         return SigmaDerivatives(
@@ -122,7 +122,7 @@ def elliptic_paraboloid(
     p = _positive(name, a=a, b=b)
     a, b = p["a"], p["b"]
 
-    def sigma_terms(u: np.ndarray, v: np.ndarray) -> SigmaDerivatives:
+    def sigma_terms(u: Array, v: Array) -> SigmaDerivatives:
         cu, su_ = np.cos(u), np.sin(u)
         z = np.zeros(np.broadcast_shapes(np.shape(u), np.shape(v)))
         return SigmaDerivatives(
@@ -152,7 +152,7 @@ def _graph_surface(name: str, height: Height, rotations: int) -> ClosedFormSurfa
     h_yy); the surface is symmetric under ``rotations`` turns about the z axis.
     """
 
-    def sigma_terms(u: np.ndarray, v: np.ndarray) -> SigmaDerivatives:
+    def sigma_terms(u: Array, v: Array) -> SigmaDerivatives:
         z = np.zeros(np.broadcast_shapes(np.shape(u), np.shape(v)))
         one = 1.0 + z
         h, hu, hv, huu, huv, hvv = height(u, v)
@@ -165,7 +165,7 @@ def _graph_surface(name: str, height: Height, rotations: int) -> ClosedFormSurfa
             stack_columns(z, z, hvv + z),
         )
 
-    def implicit_terms(points: np.ndarray, order: int = 2) -> ImplicitTerms:
+    def implicit_terms(points: Array, order: int = 2) -> ImplicitTerms:
         x, y, zc = points.T
         h, hx, hy, hxx, hxy, hyy = height(x, y)
         f = h - zc
@@ -197,7 +197,7 @@ def monkey_saddle(name: str = "monkey_saddle") -> ClosedFormSurface:
     sigma = (u, v, u^3 - 3 u v^2), (u, v) in [-1, 1] x [-1, 1].
     """
 
-    def height(x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, ...]:
+    def height(x: Array, y: Array) -> tuple[Array, ...]:
         return x**3 - 3 * x * y**2, 3 * x**2 - 3 * y**2, -6 * x * y, 6 * x, -6 * y, -6 * x
 
     return _graph_surface(name, height, rotations=3)
@@ -209,7 +209,7 @@ def crossed_trough(name: str = "crossed_trough") -> ClosedFormSurface:
     sigma = (u, v, u^2 v^2), (u, v) in [-1, 1] x [-1, 1].
     """
 
-    def height(x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, ...]:
+    def height(x: Array, y: Array) -> tuple[Array, ...]:
         return x**2 * y**2, 2 * x * y**2, 2 * x**2 * y, 2 * y**2, 4 * x * y, 2 * x**2
 
     return _graph_surface(name, height, rotations=4)
@@ -226,7 +226,7 @@ def elliptic_cylinder(
     p = _positive(name, a=a, b=b, half_length=half_length)
     a, b = p["a"], p["b"]
 
-    def sigma_terms(u: np.ndarray, v: np.ndarray) -> SigmaDerivatives:
+    def sigma_terms(u: Array, v: Array) -> SigmaDerivatives:
         cu, su_ = np.cos(u), np.sin(u)
         z = np.zeros(np.broadcast_shapes(np.shape(u), np.shape(v)))
         return SigmaDerivatives(

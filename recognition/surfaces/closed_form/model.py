@@ -59,6 +59,7 @@ class ClosedFormModel:
 
     @property
     def name(self) -> str:
+        """The surface's name."""
         return self.surface.name
 
 
@@ -69,7 +70,7 @@ def candidate_rows(
     delta: float,
     separation: float,
     max_candidates: int,
-    symmetries: Sequence[np.ndarray] = (),
+    symmetries: Sequence[Array] = (),
 ) -> NDArray[np.int64]:
     """Candidate points of the table lookup (4.7), thinned out in space.
 
@@ -80,7 +81,7 @@ def candidate_rows(
     """
     rows = model.table.query(k1, k2, delta)
     maps = [np.eye(3), *symmetries]
-    kept: list[np.ndarray] = []
+    kept: list[Array] = []
     out: list[int] = []
     for r in rows:
         q = model.points[r]

@@ -20,6 +20,7 @@ from recognition.least_squares import (
     LeastSquaresConfig,
     LeastSquaresStatus,
     LinearSolve,
+    State,
     damped_least_squares,
 )
 from recognition.surfaces.closed_form.superposition import (
@@ -33,7 +34,6 @@ from recognition.surfaces.closed_form.surface import EDGE_MARGIN, ClosedFormSurf
 __all__ = ["LocalSearch", "levenberg_marquardt", "refine_rigid_motion", "steepest_descent"]
 
 Array = NDArray[np.float64]
-State = tuple[np.ndarray, ...]
 
 
 @dataclass(frozen=True)
@@ -93,14 +93,14 @@ def _linearization(state: State) -> tuple[Array, Array]:
     return state[-2], state[-1]
 
 
-def _wrap(surface: ClosedFormSurface, x: np.ndarray) -> Array:
+def _wrap(surface: ClosedFormSurface, x: Array) -> Array:
     u, v = surface.contain(x[0], x[1])
     return np.array([u, v, np.mod(x[2], 2 * np.pi)])
 
 
 def levenberg_marquardt(
     surface: ClosedFormSurface,
-    local_points: np.ndarray,
+    local_points: Array,
     x0: ArrayLike,
     max_iterations: int = 100,
     tolerance: float = 1e-10,
@@ -111,6 +111,8 @@ def levenberg_marquardt(
     phi; (u, v) stay in the domain (wrapped where periodic; a parameter on an edge of
     the domain is held there while the step would take it out). ``cost`` is E (4.11)
     at the end; ``tolerance`` is the relative decrease of sum r_i^2 at which it stops.
+    ``local_points`` (n, 3) are the data points in the local frame at p, model units;
+    ``x0`` (3,) is the start (u, v, phi), phi in radians.
     """
     (u0, u1), (v0, v1) = surface.domain
     margin = EDGE_MARGIN * np.array([u1 - u0, v1 - v0])
@@ -125,7 +127,7 @@ def levenberg_marquardt(
     def retract(state: State, step: Array) -> State:
         return evaluate(_wrap(surface, state[0][0] + step[0]))
 
-    def held(state: State, step: Array) -> np.ndarray:
+    def held(state: State, step: Array) -> NDArray[np.bool_]:
         x = state[0][0]
         out = np.zeros(3, bool)
         out[:2] = bounded & (
@@ -186,7 +188,7 @@ def _line_minimum(
 
 def steepest_descent(
     surface: ClosedFormSurface,
-    local_points: np.ndarray,
+    local_points: Array,
     x0: ArrayLike,
     max_iterations: int = 2000,
     tolerance: float = 1e-10,
@@ -196,6 +198,8 @@ def steepest_descent(
     Each iteration minimises E along -grad E (bracketing and golden-section search) and
     the search stops when no step along it decreases E ("until no further minimization
     is possible") or E decreases by less than ``tolerance`` relative.
+    ``local_points`` (n, 3) are the data points in the local frame at p, model units;
+    ``x0`` (3,) is the start (u, v, phi), phi in radians.
     """
     x = _wrap(surface, np.asarray(x0, float))
     E, grad = superposition_error_gradient(surface, local_points, *x)
@@ -234,9 +238,9 @@ def steepest_descent(
 
 def refine_rigid_motion(
     surface: ClosedFormSurface,
-    local_points: np.ndarray,
-    R0: np.ndarray,
-    c0: np.ndarray,
+    local_points: Array,
+    R0: ArrayLike,
+    c0: ArrayLike,
     max_iterations: int = 50,
     tolerance: float = 1e-10,
 ) -> tuple[Array, Array, LocalSearch]:

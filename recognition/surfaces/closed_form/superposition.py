@@ -81,7 +81,7 @@ def model_frame(
     return d.point, F, F_u, F_v, d.su, d.sv
 
 
-def local_coordinates(geometry: LocalSurfaceGeometry, points: np.ndarray) -> np.ndarray:
+def local_coordinates(geometry: LocalSurfaceGeometry, points: ArrayLike) -> Array:
     """Data points in the local frame (t1, t2, N) at p, thesis Section 4.2.2.
 
     Returns
@@ -94,7 +94,7 @@ def local_coordinates(geometry: LocalSurfaceGeometry, points: np.ndarray) -> np.
 
 def pose_from_parameters(
     surface: ClosedFormSurface, geometry: LocalSurfaceGeometry, u: float, v: float, phi: float
-) -> np.ndarray:
+) -> Array:
     """T_model_from_data (4, 4) that puts p on sigma(u, v) turned by phi (Section 4.2.2)."""
     q, F, *_ = model_frame(surface, u, v)
     R = F @ _rz(phi)[0] @ geometry.frame.T
@@ -104,7 +104,7 @@ def pose_from_parameters(
     return T
 
 
-def point_distance_residuals(surface: ClosedFormSurface, points: np.ndarray) -> tuple[Array, Array]:
+def point_distance_residuals(surface: ClosedFormSurface, points: Array) -> tuple[Array, Array]:
     """First-order signed distances f / |grad f| (4.11) and their gradients.
 
     Returns
@@ -125,7 +125,7 @@ def point_distance_residuals(surface: ClosedFormSurface, points: np.ndarray) -> 
 
 
 def superposition_residuals(
-    surface: ClosedFormSurface, local_points: np.ndarray, u: float, v: float, phi: float
+    surface: ClosedFormSurface, local_points: Array, u: float, v: float, phi: float
 ) -> tuple[Array, Array]:
     """Residuals f / |grad f| of the transformed data points and their Jacobian.
 
@@ -157,7 +157,7 @@ def superposition_residuals(
 
 
 def _phi_terms(
-    surface: ClosedFormSurface, local_points: np.ndarray, u: float, v: float
+    surface: ClosedFormSurface, local_points: Array, u: float, v: float
 ) -> Callable[[ArrayLike], tuple[Array, Array]]:
     """``phi (m,) -> (E (m,), E_phi (m,))`` at a fixed (u, v), Eq. (4.11)."""
     q, F, *_ = model_frame(surface, u, v)
@@ -178,11 +178,13 @@ def _phi_terms(
 
 
 def superposition_error(
-    surface: ClosedFormSurface, local_points: np.ndarray, u: float, v: float, phi: ArrayLike
+    surface: ClosedFormSurface, local_points: Array, u: float, v: float, phi: ArrayLike
 ) -> float | Array:
     """Superposition error E(u, v, phi), thesis Eq. (4.11).
 
-    ``phi`` may be an array: E is then evaluated for every angle, same shape.
+    ``local_points`` (n, 3) are the data points in the local frame at p
+    (:func:`local_coordinates`), model units; ``phi`` (radians) may be an array: E
+    (model units) is then evaluated for every angle, same shape.
     """
     phi_arr = np.asarray(phi, float)
     E = _phi_terms(surface, local_points, u, v)(phi_arr.reshape(-1))[0]
@@ -190,7 +192,7 @@ def superposition_error(
 
 
 def superposition_error_gradient(
-    surface: ClosedFormSurface, local_points: np.ndarray, u: float, v: float, phi: float
+    surface: ClosedFormSurface, local_points: Array, u: float, v: float, phi: float
 ) -> tuple[float, Array]:
     """E (4.11) and its gradient (E_u, E_v, E_phi) (Section 4.2.2.1).
 
@@ -206,7 +208,7 @@ def superposition_error_gradient(
 
 def initial_phi(
     surface: ClosedFormSurface,
-    local_points: np.ndarray,
+    local_points: Array,
     u: float,
     v: float,
     samples: int = 72,
@@ -242,7 +244,7 @@ def initial_phi(
 
 
 def rigid_motion_residuals(
-    surface: ClosedFormSurface, local_points: np.ndarray, R: np.ndarray, c: np.ndarray
+    surface: ClosedFormSurface, local_points: Array, R: ArrayLike, c: Array
 ) -> tuple[Array, Array]:
     """Residuals f / |grad f| of the points ``R x_i + c`` and their Jacobian.
 

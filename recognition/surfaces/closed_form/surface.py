@@ -62,12 +62,12 @@ class SigmaDerivatives:
         sigma and its derivatives, model units per parameter unit (squared).
     """
 
-    point: np.ndarray
-    su: np.ndarray
-    sv: np.ndarray
-    suu: np.ndarray
-    suv: np.ndarray
-    svv: np.ndarray
+    point: Array
+    su: Array
+    sv: Array
+    suu: Array
+    suv: Array
+    svv: Array
 
 
 @dataclass(frozen=True, eq=False)
@@ -100,10 +100,10 @@ class ClosedFormSurface:
     parameters: Mapping[str, float]
     domain: tuple[tuple[float, float], tuple[float, float]]
     periodic: tuple[bool, bool]
-    sigma_terms: Callable[[np.ndarray, np.ndarray], SigmaDerivatives] = field(repr=False)
-    implicit_terms: Callable[[np.ndarray, int], ImplicitTerms] = field(repr=False)
+    sigma_terms: Callable[[Array, Array], SigmaDerivatives] = field(repr=False)
+    implicit_terms: Callable[[Array, int], ImplicitTerms] = field(repr=False)
     note: str = ""
-    symmetries: tuple[np.ndarray, ...] = field(default=(), repr=False)
+    symmetries: tuple[Array, ...] = field(default=(), repr=False)
 
     def sigma(self, u: ArrayLike, v: ArrayLike) -> Array:
         """sigma(u, v), (..., 3)."""
@@ -147,7 +147,7 @@ class ClosedFormSurface:
         return out[0], out[1]
 
     def closest_parameters(self, point: ArrayLike, u0: float, v0: float) -> tuple[float, float]:
-        """(u, v) of the point of sigma nearest ``point``, by Gauss-Newton from (u0, v0)."""
+        """(u, v) of the point of sigma nearest ``point`` (3,), by Gauss-Newton from (u0, v0)."""
         return _project(self, np.asarray(point, float), u0, v0)
 
     def symmetric_image(self, point: ArrayLike, estimate: ArrayLike) -> Array:
@@ -173,9 +173,9 @@ def stack_columns(*columns: Parameter) -> Array:
 
 
 def outward_normal(
-    surface: ClosedFormSurface, d: SigmaDerivatives, w: np.ndarray
+    surface: ClosedFormSurface, d: SigmaDerivatives, w: Array
 ) -> tuple[Array, Array]:
-    """Unit vector of ``w`` signed to agree with grad f at sigma, and the sign (..., 1)."""
+    """Unit vector of ``w`` (..., 3) signed to agree with grad f at sigma, and the sign (..., 1)."""
     g = surface.gradient(d.point.reshape(-1, 3)).reshape(d.point.shape)
     sign = np.where(np.sum(w * g, axis=-1, keepdims=True) < 0, -1.0, 1.0)
     norm = np.linalg.norm(w, axis=-1, keepdims=True)
@@ -248,7 +248,7 @@ def implicit_principal_curvatures(
 
 
 def _project(
-    surface: ClosedFormSurface, q: np.ndarray, u: float, v: float, iterations: int = 30
+    surface: ClosedFormSurface, q: Array, u: float, v: float, iterations: int = 30
 ) -> tuple[float, float]:
     """(u, v) of the point of sigma nearest q, by Gauss-Newton from (u, v)."""
     x = np.array(surface.contain(u, v), float)

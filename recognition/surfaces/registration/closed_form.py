@@ -14,6 +14,7 @@ import time
 from dataclasses import replace
 
 import numpy as np
+from numpy.typing import NDArray
 
 from recognition.least_squares import LeastSquaresStatus
 from recognition.rigid import rotation_about
@@ -41,6 +42,8 @@ from recognition.surfaces.registration.result import (
 
 __all__ = ["register_closed_form"]
 
+Array = NDArray[np.float64]
+
 
 def _status(status: LeastSquaresStatus) -> RegistrationStatus:
     """A local search that stalled found no step that lowers E: it converged."""
@@ -51,7 +54,7 @@ def _status(status: LeastSquaresStatus) -> RegistrationStatus:
 
 def _register_oriented(
     geometry: LocalSurfaceGeometry,
-    points: np.ndarray,
+    points: Array,
     model: ClosedFormModel,
     config: ClosedFormConfig,
     start: float,

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 
 from recognition.surfaces.data_curves import DataCurves
 from recognition.surfaces.local_geometry import LocalSurfaceGeometry, local_surface_geometry
@@ -18,6 +18,8 @@ __all__ = [
     "median_spacing",
 ]
 
+Array = NDArray[np.float64]
+
 
 def median_spacing(curves: DataCurves) -> float:
     """Median distance between consecutive points of the curves, metres."""
@@ -25,7 +27,7 @@ def median_spacing(curves: DataCurves) -> float:
     return float(np.median(np.concatenate(steps)))
 
 
-def _distances_to_polyline(points: np.ndarray, polyline: np.ndarray) -> np.ndarray:
+def _distances_to_polyline(points: Array, polyline: Array) -> Array:
     """(n,) distance from each point (n, 3) to a polyline (m, 3)."""
     a, ab = polyline[:-1], np.diff(polyline, axis=0)
     rel = points[:, None, :] - a[None]
@@ -33,7 +35,7 @@ def _distances_to_polyline(points: np.ndarray, polyline: np.ndarray) -> np.ndarr
     return np.min(np.linalg.norm(rel - s[..., None] * ab[None], axis=-1), axis=1)
 
 
-def common_point(curves: DataCurves) -> np.ndarray:
+def common_point(curves: DataCurves) -> Array:
     """The point where all the data curves meet (p of thesis Fig. 4.1), (3,) metres.
 
     Of the points of every curve, the one whose largest distance to the other curves is
@@ -42,7 +44,7 @@ def common_point(curves: DataCurves) -> np.ndarray:
     close (sampling planes a few degrees apart over a strongly curved surface) is not
     taken for p.
     """
-    best: tuple[float, np.ndarray] | None = None
+    best: tuple[float, Array] | None = None
     for i, c in enumerate(curves.curves):
         others = [_distances_to_polyline(c, o) for j, o in enumerate(curves.curves) if j != i]
         worst = np.max(others, axis=0)

@@ -15,7 +15,7 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import replace
 from typing import Any
 
-import numpy as np
+from numpy.typing import ArrayLike
 
 from recognition.errors import InvalidCurveData, InvalidModel
 from recognition.surfaces.closed_form.model import ClosedFormModel
@@ -94,7 +94,7 @@ def register_all(
     *,
     geometry: LocalSurfaceGeometry | None = None,
     stack: FieldStack | None = None,
-    which_field: np.ndarray | None = None,
+    which_field: ArrayLike | None = None,
     threads: int = 1,
 ) -> list[Registration]:
     """Register data curves on each of ``models``: one registration per model, in order.

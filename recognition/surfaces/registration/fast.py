@@ -26,9 +26,9 @@ from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
-from recognition.least_squares import LeastSquaresConfig, damped_least_squares
+from recognition.least_squares import LeastSquaresConfig, State, damped_least_squares
 from recognition.rigid import cross, pose_matrix, rotation_about, rotation_from_vector
 from recognition.surfaces.data_curves import DataCurves
 from recognition.surfaces.distance import FieldStack
@@ -52,6 +52,7 @@ from recognition.surfaces.registration.superposition import frames, hypotheses
 __all__ = ["DISTINCT_ANGLE_RAD", "DISTINCT_RADIUS_M", "register_fast"]
 
 Array = NDArray[np.float64]
+IntArray = NDArray[np.int64]
 
 
 @dataclass(frozen=True)
@@ -72,7 +73,7 @@ DISTINCT_ANGLE_RAD = float(np.deg2rad(3.0))
 
 def _gauss_newton(
     stack: FieldStack,
-    which: np.ndarray,
+    which: IntArray,
     points: Array,
     R: Array,
     t: Array,
@@ -90,21 +91,21 @@ def _gauss_newton(
     """
     pts_T = np.ascontiguousarray(points.T)
 
-    def evaluate(R: Array, t: Array, which: np.ndarray) -> tuple[np.ndarray, ...]:
+    def evaluate(R: Array, t: Array, which: IntArray) -> State:
         X = (R @ pts_T).transpose(0, 2, 1) + t[:, None, :]
         r, g = stack.value_and_gradient(X, which)
         return R, t, which, X, r, g
 
-    def cost(state: tuple[np.ndarray, ...]) -> Array:
+    def cost(state: State) -> Array:
         r = state[4]
         return np.mean(r * r, axis=1)
 
-    def linearize(state: tuple[np.ndarray, ...]) -> tuple[Array, Array]:
+    def linearize(state: State) -> tuple[Array, Array]:
         X, r, g = state[3], state[4], state[5]
         c = X.mean(axis=1)
         return r, np.concatenate([cross(X - c[:, None, :], g), g], axis=-1)
 
-    def retract(state: tuple[np.ndarray, ...], step: Array) -> tuple[np.ndarray, ...]:
+    def retract(state: State, step: Array) -> State:
         R, t, which, X = state[:4]
         c = X.mean(axis=1)
         dR = rotation_from_vector(step[:, :3])
@@ -155,9 +156,7 @@ def _dense_candidates(
     return rows[order[first]]
 
 
-def _arm_indices(
-    curves: DataCurves, point: np.ndarray, fractions: Sequence[float] | np.ndarray
-) -> NDArray[np.int64]:
+def _arm_indices(curves: DataCurves, point: Array, fractions: Sequence[float] | Array) -> IntArray:
     """Indices into ``curves.points`` of the points at ``fractions`` of each arm's length.
 
     An arm runs from the point of a curve nearest p to one of its ends; the result holds,
@@ -201,7 +200,7 @@ def _distinct(
     return order[np.array(kept, dtype=np.int64)]
 
 
-def _smallest(values: np.ndarray, count: int) -> NDArray[np.intp]:
+def _smallest(values: Array, count: int) -> NDArray[np.intp]:
     """Indices of the ``count`` smallest values (all if fewer), in no particular order."""
     if count >= values.size:
         return np.arange(values.size)
@@ -211,7 +210,7 @@ def _smallest(values: np.ndarray, count: int) -> NDArray[np.intp]:
 def _screen(
     models: Sequence[MeshModel],
     stack: FieldStack,
-    which_field: np.ndarray,
+    which_field: IntArray,
     curves: DataCurves,
     geometry: LocalSurfaceGeometry,
     config: FastConfig,
@@ -298,7 +297,7 @@ def _search(
     geometry: LocalSurfaceGeometry,
     config: FastConfig,
     search: FastSearchConfig,
-    which_field: np.ndarray,
+    which_field: IntArray,
 ) -> list[Registration]:
     """One pass of the fast search over ``models`` (fields ``which_field`` in ``stack``).
 
@@ -392,7 +391,7 @@ def _search(
 
 
 def _field_errors(
-    stack: FieldStack, which_field: np.ndarray, points: Array, R: Array, t: Array
+    stack: FieldStack, which_field: IntArray, points: Array, R: Array, t: Array
 ) -> Array:
     """Mean |sdf| of the data points at poses R (B, 3, 3), t (B, 3) in fields (B,)."""
     X = (R @ points.T).transpose(0, 2, 1) + t[:, None, :]
@@ -406,7 +405,7 @@ def register_fast(
     config: FastConfig = FastConfig(),
     *,
     stack: FieldStack | None = None,
-    which_field: np.ndarray | None = None,
+    which_field: ArrayLike | None = None,
     noise_m: float | None = None,
 ) -> list[Registration]:
     """Fast-mode registration of the curves on several models at once (module docstring).

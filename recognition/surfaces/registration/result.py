@@ -82,7 +82,7 @@ class Registration:
     error_m: float
     T_model_from_data: NDArray[np.float64]
     location: NDArray[np.float64]
-    candidates: np.ndarray
+    candidates: NDArray[np.int64] | NDArray[np.float64]
     iterations: int
     status: RegistrationStatus
     time_s: float
@@ -123,7 +123,7 @@ def rejected(
     model: str,
     mode: RegistrationMode,
     start: float,
-    candidates: np.ndarray | None = None,
+    candidates: NDArray[np.int64] | NDArray[np.float64] | None = None,
     elapsed: float | None = None,
 ) -> Registration:
     """The registration of a model that the table lookup rejected (error ``inf``).

@@ -17,21 +17,22 @@ from recognition.surfaces.mesh_model import MeshModel
 
 __all__ = ["candidate_rows", "frames", "hypotheses", "model_frames", "superposition_poses"]
 
+Array = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
 
 def hypotheses(geometry: LocalSurfaceGeometry) -> list[LocalSurfaceGeometry]:
     """The data's local geometry, and its flip when the normal's sign is unknown."""
     return [geometry] if geometry.oriented else [geometry, geometry.flipped()]
 
 
-def candidate_rows(
-    model: MeshModel, geometry: LocalSurfaceGeometry, delta: float
-) -> NDArray[np.int64]:
+def candidate_rows(model: MeshModel, geometry: LocalSurfaceGeometry, delta: float) -> IntArray:
     """Rows of the model's table within ``delta`` of the data's (k1, k2), nearest first
     (thesis Eq. (4.7))."""
     return model.table.query(geometry.k1, geometry.k2, delta)
 
 
-def frames(normals: np.ndarray, directions: np.ndarray) -> NDArray[np.float64]:
+def frames(normals: Array, directions: Array) -> Array:
     """(k, 3, 3) right-handed frames whose columns are (t1, n x t1, n), t1 the direction
     made tangent (any tangent where it is parallel to the normal)."""
     t1 = directions - normals * np.einsum("ij,ij->i", directions, normals)[:, None]
@@ -43,7 +44,7 @@ def frames(normals: np.ndarray, directions: np.ndarray) -> NDArray[np.float64]:
     return np.stack([t1, np.cross(normals, t1), normals], axis=-1)
 
 
-def model_frames(model: MeshModel, rows: np.ndarray) -> NDArray[np.float64]:
+def model_frames(model: MeshModel, rows: IntArray) -> Array:
     """(k, 3, 3) frames (d1, d2, n) at table rows: principal direction and normal."""
     table = model.table
     assert table.d1 is not None  # mesh tables carry principal directions
@@ -51,8 +52,8 @@ def model_frames(model: MeshModel, rows: np.ndarray) -> NDArray[np.float64]:
 
 
 def superposition_poses(
-    model: MeshModel, rows: np.ndarray, geometry: LocalSurfaceGeometry, phis: np.ndarray
-) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    model: MeshModel, rows: IntArray, geometry: LocalSurfaceGeometry, phis: Array
+) -> tuple[Array, Array]:
     """Poses (R, t) putting p on each table row's vertex, N on its normal, turned by phi.
 
     Returns R (k, f, 3, 3), t (k, f, 3) mapping data-frame points to the model frame.

@@ -39,7 +39,9 @@ from recognition.surfaces.sections import local_submesh, plane_section_polyline,
 
 __all__ = ["correspondence_error", "register_thesis"]
 
-Layout = list[tuple[NDArray[np.float64], float, int]]
+Array = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+Layout = list[tuple[Array, float, int]]
 """Per data curve: its plane normal, mean point spacing and the index of its point nearest p."""
 
 
@@ -56,16 +58,17 @@ def _curve_layout(curves: DataCurves) -> Layout:
 def correspondence_error(
     curves: DataCurves,
     layout: Layout,
-    R: np.ndarray,
-    t: np.ndarray,
-    anchor: np.ndarray,
-    local_mesh: tuple[np.ndarray, np.ndarray],
+    R: Array,
+    t: Array,
+    anchor: Array,
+    local_mesh: tuple[Array, IntArray],
 ) -> float:
     """Mean distance between data points and their plane-section counterparts, Eq. (4.15).
 
-    ``R``, ``t`` move the data onto the model with p on ``anchor`` (a model vertex);
-    ``local_mesh`` (vertices, faces) is the part of the model around the anchor.
-    Infinite when a section through the anchor is too short for the data curve.
+    ``R`` (3, 3), ``t`` (3,) move the data onto the model with p on ``anchor`` (3,) (a
+    model vertex); ``local_mesh`` (vertices (m, 3), faces (f, 3)) is the part of the model
+    around the anchor; lengths in metres, the result too. Infinite when a section through
+    the anchor is too short for the data curve.
     """
     total, count = 0.0, 0
     for curve, (normal, spacing, middle) in zip(curves.curves, layout, strict=True):
@@ -109,7 +112,7 @@ def register_thesis(
     phis = np.arange(0.0, 2 * np.pi - 1e-9, step)
     adjacency = model.mesh.vertex_neighbors
     centres = cKDTree(model.mesh.triangles_center)
-    local_cache: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+    local_cache: dict[int, tuple[Array, IntArray]] = {}
     best = None
     candidates_all = []
     evaluations = 0
@@ -118,8 +121,8 @@ def register_thesis(
         candidates_all.append(model.table.site[rows])
 
         def pose(
-            vertex: int, phi: float, d1: np.ndarray, hyp: LocalSurfaceGeometry = hyp
-        ) -> tuple[np.ndarray, np.ndarray]:
+            vertex: int, phi: float, d1: Array, hyp: LocalSurfaceGeometry = hyp
+        ) -> tuple[Array, Array]:
             n = model.normals[vertex]
             t1 = d1 - n * (d1 @ n)
             t1 /= np.linalg.norm(t1)
@@ -127,9 +130,7 @@ def register_thesis(
             R = frame @ rotation_about(2, np.array(phi)) @ hyp.frame.T
             return R, model.vertices[vertex] - R @ hyp.point
 
-        def error_at(
-            vertex: int, phi: float, d1: np.ndarray
-        ) -> tuple[float, np.ndarray, np.ndarray]:
+        def error_at(vertex: int, phi: float, d1: Array) -> tuple[float, Array, Array]:
             nonlocal evaluations
             evaluations += 1
             R, t = pose(vertex, phi, d1)
