@@ -23,6 +23,7 @@ import numpy as np
 
 from recognition.curves.families import CanonicalCurve, CurveKind
 from recognition.errors import DegenerateGeometry, InvalidCurveData
+from recognition.rigid import apply_pose, pose_matrix, rotation_2d
 
 __all__ = [
     "CanonicalReduction",
@@ -76,8 +77,7 @@ class CanonicalReduction:
     def points(self, t) -> np.ndarray:
         """(n, 2) points of the given curve at original parameters ``t``, via the canonical form."""
         q = self.curve.points(self.canonical_parameter(np.atleast_1d(t)))
-        T = self.T_data_from_canonical
-        return q @ T[:2, :2].T + T[:2, 2]
+        return apply_pose(self.T_data_from_canonical, q)
 
 
 def _check_finite(*coefficients) -> None:
@@ -86,11 +86,6 @@ def _check_finite(*coefficients) -> None:
         raise InvalidCurveData(
             f"expected finite scalar polynomial coefficients, got {list(coefficients)}"
         )
-
-
-def _rotation(theta: float) -> np.ndarray:
-    c, s = np.cos(theta), np.sin(theta)
-    return np.array([[c, -s], [s, c]])
 
 
 def _rotated(theta: float, x_coefficients, y_coefficients):
@@ -102,14 +97,11 @@ def _rotated(theta: float, x_coefficients, y_coefficients):
 
 
 def _reduction(kind, params, theta, origin_rotated, u_scale, u_offset) -> CanonicalReduction:
-    R = _rotation(theta)
-    T = np.eye(3)
-    T[:2, :2] = R
-    T[:2, 2] = R @ np.asarray(origin_rotated, dtype=float)
+    R = rotation_2d(theta)
     return CanonicalReduction(
         CanonicalCurve(kind, tuple(float(p) for p in params)),
         float(theta),
-        T,
+        pose_matrix(R, R @ np.asarray(origin_rotated, dtype=float)),
         float(u_scale),
         float(u_offset),
     )

@@ -23,9 +23,10 @@ from recognition.curves.recognition import (
     fit_class,
     recognize_curve,
 )
-from recognition.curves.sampling import random_curve, random_rigid_motion, sample_by_arc_length
+from recognition.curves.sampling import random_curve, sample_by_arc_length
 from recognition.errors import InvalidCurveData, RecognitionError
 from recognition.reproduction.tables import TableResult, markdown_table, save_figure
+from recognition.rigid import random_planar_motion
 
 __all__ = [
     "CLASSES",
@@ -134,7 +135,7 @@ def _sample(curve, t0, t1, experiment, rng):
         experiment.spacing,
         rng=rng,
         noise_std=experiment.noise_std,
-        T_data_from_canonical=random_rigid_motion(rng),
+        T_data_from_canonical=random_planar_motion(rng),
     )
 
 

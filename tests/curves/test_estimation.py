@@ -10,9 +10,9 @@ import pytest
 
 from recognition.curves.estimation import finite_difference_geometry, local_fit_geometry
 from recognition.curves.families import CanonicalCurve, CurveKind
-from recognition.curves.sampling import apply_rigid_motion, random_rigid_motion
 from recognition.curves.sampling import sample_by_arc_length as sample
 from recognition.errors import InvalidCurveData
+from recognition.rigid import apply_pose, random_planar_motion
 
 #: The most accurate local fit on exact data (used by the recognition tests too).
 EXACT_FIT = {"window": 11, "degree": 6, "kappa_window": None}
@@ -131,8 +131,8 @@ def test_estimates_are_invariant_under_rigid_motion_and_odd_under_reversal():
     for estimator in (local_fit_geometry, finite_difference_geometry):
         base = estimator(points)
         for _ in range(3):
-            T = random_rigid_motion(rng, translation_scale=10.0)
-            moved = estimator(apply_rigid_motion(T, points))
+            T = random_planar_motion(rng, translation_scale=10.0)
+            moved = estimator(apply_pose(T, points))
             scale = np.abs(base.kappa).max()
             np.testing.assert_allclose(moved.kappa, base.kappa, atol=1e-8 * scale)
             np.testing.assert_allclose(moved.kappa_s, base.kappa_s, atol=1e-6 * scale**2)

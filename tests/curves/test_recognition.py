@@ -15,15 +15,14 @@ from recognition.curves import (
     CanonicalCurve,
     CurveKind,
     local_fit_geometry,
-    random_rigid_motion,
     recognize_curve,
     recognize_points,
     sample_by_arc_length,
 )
 from recognition.curves import invariants as inv
 from recognition.curves.recognition import canonical_parameters, fit_class
-from recognition.curves.sampling import apply_rigid_motion
 from recognition.errors import DegenerateGeometry, InvalidCurveData, NoRealSolution
+from recognition.rigid import apply_pose, random_planar_motion
 
 FIT = {"window": 11, "degree": 6, "kappa_window": None}
 TOLERANCE = 1e-4
@@ -63,7 +62,7 @@ def assert_contacts(kind, got, truth, atol):
 @pytest.mark.parametrize("kind", list(CASES))
 def test_each_class_is_recognised_from_sampled_points(kind):
     params, (t0, t1), rtol, atol = CASES[kind]
-    T = random_rigid_motion(np.random.default_rng(60))
+    T = random_planar_motion(np.random.default_rng(60))
     result, t = recognise(CanonicalCurve(kind, params), t0, t1, T)
     assert result.kind is kind
     assert result.residual <= TOLERANCE
@@ -75,7 +74,7 @@ def test_each_class_is_recognised_from_sampled_points(kind):
 def test_a_quartic_is_unclassified():
     """x = t, y = a t^4 + b t^2 + c t belongs to no class of the tree."""
     curve = CanonicalCurve(CurveKind.QUARTIC, (1.0, -0.5, 0.3))
-    T = random_rigid_motion(np.random.default_rng(61))
+    T = random_planar_motion(np.random.default_rng(61))
     result, _ = recognise(curve, 0.3, 1.8, T)
     assert result.kind is CurveKind.UNCLASSIFIED
     assert result.parameters == {}
@@ -92,8 +91,8 @@ def test_recognition_is_invariant_under_rigid_motion(kind):
     rng = np.random.default_rng(62)
     results = []
     for _ in range(2):
-        T = random_rigid_motion(rng, translation_scale=5.0)
-        results.append(recognize_points(apply_rigid_motion(T, points), tolerance=TOLERANCE, **FIT))
+        T = random_planar_motion(rng, translation_scale=5.0)
+        results.append(recognize_points(apply_pose(T, points), tolerance=TOLERANCE, **FIT))
     (first, used1), (second, used2) = results
     np.testing.assert_allclose(used1.kappa, used2.kappa, rtol=1e-7)
     assert first.kind is second.kind is kind
@@ -116,7 +115,7 @@ def test_conic_invariants_are_invariant_under_rigid_motion():
     base_c = inv.conic_invariants_regression(base.kappa, base.kappa_s)[:2]
     rng = np.random.default_rng(63)
     for _ in range(10):
-        moved = local_fit_geometry(apply_rigid_motion(random_rigid_motion(rng), points), **FIT)
+        moved = local_fit_geometry(apply_pose(random_planar_motion(rng), points), **FIT)
         np.testing.assert_allclose(
             inv.parabola_invariant(moved.kappa, moved.kappa_s), base_i_p, rtol=1e-6
         )
@@ -139,7 +138,7 @@ def test_recognition_is_invariant_under_reparametrisation(kind):
     shift = 0.37 * SPACING * np.sign(t1 - t0) / float(curve.speed(t0)[0])
     samplings = [(t0 + shift, t1, 0.008), (t1, t0, SPACING)]
     for start, end, spacing in samplings:
-        result, _ = recognise(curve, start, end, random_rigid_motion(rng), spacing=spacing)
+        result, _ = recognise(curve, start, end, random_planar_motion(rng), spacing=spacing)
         assert result.kind is kind
         got = np.array(list(result.parameters.values()))
         np.testing.assert_allclose(got, truth, rtol=rtol)
