@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -9,8 +10,16 @@ from numpy.typing import ArrayLike
 
 from recognition.curves.invariants.spline import cubic_spline_c, cubic_spline_residual
 from recognition.errors import DegenerateGeometry, InvalidCurveData, NoRealSolution
+from recognition.least_squares import (
+    Damping,
+    LeastSquaresConfig,
+    LinearSolve,
+    damped_least_squares,
+)
 
 __all__ = [
+    "G_FIT_SOLVER",
+    "JACOBIAN_STEP",
     "RESIDUAL_CAP",
     "SOLUTION_MERGE_TOL",
     "ZERO_COST_TOL",
@@ -27,6 +36,21 @@ SOLUTION_MERGE_TOL = 1e-6
 ZERO_COST_TOL = 1e-20
 #: |g| is capped at this value (and NaN replaced by it) during the search.
 RESIDUAL_CAP = 1e6
+#: Central-difference step of the Jacobian, relative to max(1, |x|).
+JACOBIAN_STEP = 1e-7
+#: The local solves: Marquardt's diagonal damping (the unknowns log a, b and the slope
+#: angle have different scales), least-norm steps, to a relative step of 1e-13.
+G_FIT_SOLVER = LeastSquaresConfig(
+    max_iterations=200,
+    damping=Damping.DIAGONAL,
+    initial_damping=1e-3,
+    shrink=1.0 / 3.0,
+    grow=4.0,
+    max_damping=1e12,
+    rtol=0.0,
+    step_tol=1e-13,
+    solve=LinearSolve.LEAST_NORM,
+)
 
 
 @dataclass(frozen=True)
@@ -93,48 +117,48 @@ class CubicSplineGFit:
         return min(candidates, key=lambda s: s.c_spread)
 
 
-def _batched_levenberg_marquardt(residuals, X0, *, max_iterations=200, step_tol=1e-13):
-    """Minimise ``sum(residuals(x)^2)`` from every row of ``X0`` at once.
-
-    ``residuals`` maps (S, n) to (S, m). The Jacobian is a central difference; each start
-    keeps its own damping. Returns the final points (S, n) and costs (S,).
-    """
-    X = np.array(X0, dtype=float)
-    S, n = X.shape
-    r = residuals(X)
-    cost = np.sum(r * r, axis=1)
-    damping = np.full(S, 1e-3)
-    active = np.ones(S, dtype=bool)
+def _linearize(
+    residuals: Callable[[np.ndarray], np.ndarray], x: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Residuals (S, m) at the rows of ``x`` (S, n) and their central-difference Jacobian
+    (S, m, n), from one batched evaluation of ``residuals``."""
+    S, n = x.shape
+    h = JACOBIAN_STEP * np.maximum(1.0, np.abs(x))
     eye = np.eye(n)
-    for _ in range(max_iterations):
-        idx = np.flatnonzero(active)
-        if idx.size == 0:
-            break
-        x = X[idx]
-        h = 1e-7 * np.maximum(1.0, np.abs(x))
-        shifted = np.concatenate(
-            [x[:, None, :] + h[:, None, :] * eye, x[:, None, :] - h[:, None, :] * eye], axis=1
-        )  # (s, 2n, n)
-        F = residuals(shifted.reshape(-1, n)).reshape(idx.size, 2 * n, -1)
-        J = ((F[:, :n] - F[:, n:]) / (2.0 * h[:, :, None])).transpose(0, 2, 1)  # (s, m, n)
-        JtJ = np.einsum("smi,smj->sij", J, J)
-        Jtr = np.einsum("smi,sm->si", J, r[idx])
-        diag = np.einsum("sii->si", JtJ)
-        A = JtJ + damping[idx, None, None] * diag[:, :, None] * eye
-        with np.errstate(all="ignore"):
-            step = -np.einsum("sij,sj->si", np.linalg.pinv(A), Jtr)
-        step = np.where(np.isfinite(step), step, 0.0)
-        trial = x + step
-        r_trial = residuals(trial)
-        cost_trial = np.sum(r_trial * r_trial, axis=1)
-        better = cost_trial < cost[idx]
-        X[idx[better]] = trial[better]
-        r[idx[better]] = r_trial[better]
-        cost[idx[better]] = cost_trial[better]
-        damping[idx] = np.where(better, damping[idx] / 3.0, damping[idx] * 4.0)
-        small = np.max(np.abs(step) / np.maximum(1.0, np.abs(x)), axis=1) < step_tol
-        active[idx] = ~(small | (damping[idx] > 1e12) | (cost[idx] == 0.0))
-    return X, cost
+    points = np.concatenate(
+        [x[:, None, :], x[:, None, :] + h[:, None, :] * eye, x[:, None, :] - h[:, None, :] * eye],
+        axis=1,
+    )  # (S, 2n + 1, n)
+    F = residuals(points.reshape(-1, n)).reshape(S, 2 * n + 1, -1)
+    J = ((F[:, 1 : n + 1] - F[:, n + 1 :]) / (2.0 * h[:, :, None])).transpose(0, 2, 1)
+    return F[:, 0], J
+
+
+def _relative_step(state: tuple[np.ndarray, ...], step: np.ndarray) -> np.ndarray:
+    """Largest step component relative to max(1, |x|), (S,)."""
+    return np.max(np.abs(step) / np.maximum(1.0, np.abs(state[0])), axis=1)
+
+
+def _solve_from_starts(
+    residuals: Callable[[np.ndarray], np.ndarray], starts: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Minimise ``sum(residuals(x)^2)`` from every row of ``starts`` (S, n) at once;
+    returns the final points (S, n) and costs (S,)."""
+
+    def cost(state: tuple[np.ndarray, ...]) -> np.ndarray:
+        r = residuals(state[0])
+        return np.sum(r * r, axis=1)
+
+    with np.errstate(all="ignore"):
+        result = damped_least_squares(
+            (starts,),
+            cost=cost,
+            linearize=lambda state: _linearize(residuals, state[0]),
+            retract=lambda state, step: (state[0] + step,),
+            config=G_FIT_SOLVER,
+            step_size=_relative_step,
+        )
+    return result.state[0], result.cost
 
 
 def fit_cubic_spline_g(
@@ -151,7 +175,8 @@ def fit_cubic_spline_g(
     Minimises ``sum_i g(a, b, lambda_i)^2`` where g is (3.44) divided by ``81 M a^4``
     (:func:`cubic_spline_residual`) and ``lambda_i = tan(arctan(lambda1) + dphi_i)`` by
     (3.29). The unknowns are ``(log a, b, arctan(lambda1))``; ``n_starts`` local
-    Levenberg-Marquardt solves start from seeded random points with ``a`` spread over
+    Levenberg-Marquardt solves (:func:`recognition.least_squares.damped_least_squares`,
+    settings :data:`G_FIT_SOLVER`) start from seeded random points with ``a`` spread over
     two decades around ``sqrt(median |kappa|)`` (a has the unit length^(-1/2)),
     ``b`` in [-3, 3] and the slope angle uniform. Every distinct local minimum is
     returned with its cost and with c at each contact (formula after (3.44),
@@ -212,7 +237,7 @@ def fit_cubic_spline_g(
             rng.uniform(-np.pi / 2, np.pi / 2, n_starts),
         ]
     )
-    X, cost = _batched_levenberg_marquardt(residuals, starts)
+    X, cost = _solve_from_starts(residuals, starts)
     X[:, 2] = np.mod(X[:, 2] + np.pi / 2, np.pi) - np.pi / 2
     keep = np.isfinite(cost) & (np.abs(X[:, 0]) < 700.0)
     found: list[tuple[float, float, float, float]] = []
