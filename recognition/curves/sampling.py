@@ -89,16 +89,19 @@ def sample_by_arc_length(
     t = np.interp(s, s_fine, t_fine)
     T = np.eye(3) if T_data_from_canonical is None else np.asarray(T_data_from_canonical, float)
     points = apply_pose(T, curve.points(t))
-    if noise_std > 0:
+    if noise_std > 0 and rng is not None:  # rng is not None: checked above
         points = points + rng.normal(scale=noise_std, size=points.shape)
     return SampledCurve(points, t, curve, T, float(noise_std))
 
 
-def _signed(rng, low, high):
+def _signed(rng: np.random.Generator, low: float, high: float) -> float:
+    """A magnitude uniform in [low, high) with a random sign."""
     return rng.choice([-1.0, 1.0]) * rng.uniform(low, high)
 
 
-def random_curve(kind: CurveKind | str, rng: np.random.Generator):
+def random_curve(
+    kind: CurveKind | str, rng: np.random.Generator
+) -> tuple[CanonicalCurve, float, float]:
     """A random curve of class ``kind`` and a parameter interval to sample it on.
 
     The shapes are drawn from fixed, documented ranges (unit-free; think centimetres),
@@ -124,6 +127,7 @@ def random_curve(kind: CurveKind | str, rng: np.random.Generator):
     ``c``. Returns ``(CanonicalCurve, t_start, t_end)``.
     """
     kind = CurveKind(kind)
+    params: tuple[float, ...]
     if kind is CurveKind.PARABOLA:
         params = (rng.uniform(0.5, 3.0),)
         t0 = rng.uniform(-2.0, 0.0)

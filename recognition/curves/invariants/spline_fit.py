@@ -205,27 +205,28 @@ def fit_cubic_spline_g(
     n_starts : int
         Number of starting points.
     """
-    kappa, kappa_s, dphi = (np.asarray(v, dtype=float).ravel() for v in (kappa, kappa_s, dphi))
+    kappa, kappa_s = (np.asarray(v, dtype=float).ravel() for v in (kappa, kappa_s))
+    turn = np.asarray(dphi, dtype=float).ravel()
     m = kappa.size
-    if m < 3 or kappa_s.shape != (m,) or dphi.shape != (m,):
+    if m < 3 or kappa_s.shape != (m,) or turn.shape != (m,):
         raise InvalidCurveData(
             f"expected kappa, kappa_s and dphi at the same m >= 3 contacts, got sizes "
-            f"{kappa.size}, {kappa_s.size}, {dphi.size}"
+            f"{kappa.size}, {kappa_s.size}, {turn.size}"
         )
     if not (
-        np.all(np.isfinite(kappa)) and np.all(np.isfinite(kappa_s)) and np.all(np.isfinite(dphi))
+        np.all(np.isfinite(kappa)) and np.all(np.isfinite(kappa_s)) and np.all(np.isfinite(turn))
     ):
         raise InvalidCurveData("kappa, kappa_s and dphi must be finite; got NaN or infinity")
     if np.any(kappa == 0):
         raise DegenerateGeometry("g divides by kappa^2: every contact needs kappa != 0")
     if n_starts < 1:
         raise InvalidCurveData(f"n_starts must be >= 1, got {n_starts}")
-    dphi = dphi - dphi[0]
+    turn = turn - turn[0]
 
     def residuals(X: np.ndarray) -> np.ndarray:  # (S, 3) -> (S, m)
         with np.errstate(all="ignore"):
             g = cubic_spline_residual(
-                np.exp(X[:, :1]), X[:, 1:2], np.tan(X[:, 2:3] + dphi), kappa, kappa_s
+                np.exp(X[:, :1]), X[:, 1:2], np.tan(X[:, 2:3] + turn), kappa, kappa_s
             )
         return np.clip(np.where(np.isfinite(g), g, RESIDUAL_CAP), -RESIDUAL_CAP, RESIDUAL_CAP)
 
@@ -253,7 +254,7 @@ def fit_cubic_spline_g(
             found.append((a, b, angle, float(cost[i])))
     solutions = []
     for a, b, angle, c_cost in found:
-        slopes = np.tan(angle + dphi)
+        slopes = np.tan(angle + turn)
         with np.errstate(all="ignore"):
             c = cubic_spline_c(a, b, slopes, kappa, kappa_s)
         solutions.append(CubicSplineGSolution(a, b, float(np.tan(angle)), slopes, c_cost, c))

@@ -105,14 +105,15 @@ def contact_data(kappa: ArrayLike, kappa_s: ArrayLike, dphi: ArrayLike | None) -
         raise InvalidCurveData(f"expected kappa, kappa_s at three or more points, got {kappa.size}")
     if not (np.all(np.isfinite(kappa)) and np.all(np.isfinite(kappa_s))):
         raise InvalidCurveData("kappa and kappa_s must be finite; got NaN or infinity")
+    phi: np.ndarray | None = None
     if dphi is not None:
-        dphi = np.asarray(dphi, dtype=float).ravel()
-        if dphi.shape != kappa.shape or not np.all(np.isfinite(dphi)):
+        phi = np.asarray(dphi, dtype=float).ravel()
+        if phi.shape != kappa.shape or not np.all(np.isfinite(phi)):
             raise InvalidCurveData(
                 f"dphi must hold {kappa.size} finite tangent rotations (radians), "
-                f"got shape {dphi.shape}"
+                f"got shape {phi.shape}"
             )
-        dphi = dphi - dphi[0]
+        phi = phi - phi[0]
     kappa_ref = float(np.median(np.abs(kappa)))
     if not np.any(kappa != 0):
         raise DegenerateGeometry(
@@ -122,7 +123,7 @@ def contact_data(kappa: ArrayLike, kappa_s: ArrayLike, dphi: ArrayLike | None) -
     # magnitude where they are small: estimation errors grow with |kappa| and |kappa_s|
     kappa_scale = np.abs(kappa) + max(kappa_ref, 1e-300)
     kappa_s_scale = np.abs(kappa_s) + float(np.median(np.abs(kappa_s))) + kappa_ref**2
-    return ContactData(kappa, kappa_s, dphi, kappa_scale, kappa_s_scale)
+    return ContactData(kappa, kappa_s, phi, kappa_scale, kappa_s_scale)
 
 
 def signature_residuals(
