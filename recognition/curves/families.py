@@ -156,7 +156,8 @@ def tangent_angle(d: np.ndarray) -> np.ndarray:
 
 @dataclass(frozen=True)
 class CanonicalCurve:
-    """A curve of one class in its canonical form (thesis Sections 3.2.1-3.2.2).
+    """A curve of one class in its canonical form (thesis Sections 3.2.1-3.2.2; the cubic
+    spline is thesis Eq. (3.35)).
 
     Attributes
     ----------

@@ -123,7 +123,8 @@ def _reduction(
 def reduce_parabola(
     a2: float, a1: float, a0: float, b2: float, b1: float, b0: float
 ) -> CanonicalReduction:
-    """Parabola ``x = a2 t^2 + a1 t + a0, y = b2 t^2 + b1 t + b0`` (3.4) in canonical form.
+    """Parabola ``x = a2 t^2 + a1 t + a0, y = b2 t^2 + b1 t + b0``, thesis Eq. (3.4), in
+    canonical form.
 
     Thesis Section 3.2.1.1: rotate by ``theta`` with ``tan(theta) = b2 / a2`` so that y
     loses its ``t^2`` term, then reparametrise and translate to ``x = a u^2, y = 2 a u``
@@ -200,7 +201,8 @@ def reduce_cubical_parabola(
 def reduce_cubic_spline(
     a3: float, a2: float, a1: float, a0: float, b3: float, b2: float, b1: float, b0: float
 ) -> CanonicalReduction:
-    """Cubic spline segment (3.25) in the canonical form (3.35), ``x = u^2``.
+    """Cubic spline segment, thesis Eq. (3.25), in the canonical form of thesis Eq. (3.35),
+    ``x = u^2``.
 
     Thesis Section 3.2.2.3 states that "proper rotation, translation, and
     reparametrization" give ``x = u^2, y = a u^3 + b u^2 + c u``; the steps are:

@@ -8,12 +8,15 @@ tree's consistency tolerance for such data. Recovered shape parameters are then 
 so the cases are few and fixed.
 """
 
+from collections.abc import Sequence
+
 import numpy as np
 import pytest
 
 from recognition.curves import (
     CanonicalCurve,
     CurveKind,
+    CurveRecognition,
     local_fit_geometry,
     recognize_curve,
     recognize_points,
@@ -40,13 +43,19 @@ CASES = {
 }
 
 
-def recognise(curve, t_start, t_end, T=None, spacing=SPACING):
+def recognise(
+    curve: CanonicalCurve,
+    t_start: float,
+    t_end: float,
+    T: np.ndarray | None = None,
+    spacing: float = SPACING,
+) -> tuple[CurveRecognition, np.ndarray]:
     sampled = sample_by_arc_length(curve, t_start, t_end, spacing, T_data_from_canonical=T)
     result, used = recognize_points(sampled.points, tolerance=TOLERANCE, **FIT)
     return result, sampled.t[used.index]
 
 
-def assert_contacts(kind, got, truth, atol):
+def assert_contacts(kind: CurveKind, got: np.ndarray, truth: np.ndarray, atol: float) -> None:
     """Contact parameters up to the curve's symmetries; NaN marks estimation outliers."""
     finite = np.isfinite(got)
     assert finite.sum() >= 0.8 * got.size
@@ -60,7 +69,7 @@ def assert_contacts(kind, got, truth, atol):
 
 
 @pytest.mark.parametrize("kind", list(CASES))
-def test_each_class_is_recognised_from_sampled_points(kind):
+def test_each_class_is_recognised_from_sampled_points(kind: CurveKind) -> None:
     params, (t0, t1), rtol, atol = CASES[kind]
     T = random_planar_motion(np.random.default_rng(60))
     result, t = recognise(CanonicalCurve(kind, params), t0, t1, T)
@@ -71,7 +80,7 @@ def test_each_class_is_recognised_from_sampled_points(kind):
     assert_contacts(kind, result.contact_parameters, t, atol)
 
 
-def test_a_quartic_is_unclassified():
+def test_a_quartic_is_unclassified() -> None:
     """x = t, y = a t^4 + b t^2 + c t belongs to no class of the tree."""
     curve = CanonicalCurve(CurveKind.QUARTIC, (1.0, -0.5, 0.3))
     T = random_planar_motion(np.random.default_rng(61))
@@ -83,7 +92,7 @@ def test_a_quartic_is_unclassified():
 
 
 @pytest.mark.parametrize("kind", [CurveKind.ELLIPSE, CurveKind.SEMICUBICAL_PARABOLA])
-def test_recognition_is_invariant_under_rigid_motion(kind):
+def test_recognition_is_invariant_under_rigid_motion(kind: CurveKind) -> None:
     """The same samples placed by two random rigid motions give the same class, shape,
     invariants and contacts (the estimates agree to ~1e-10)."""
     params, (t0, t1), _, _ = CASES[kind]
@@ -106,7 +115,7 @@ def test_recognition_is_invariant_under_rigid_motion(kind):
     np.testing.assert_allclose(first.contact_parameters, second.contact_parameters, atol=1e-6)
 
 
-def test_conic_invariants_are_invariant_under_rigid_motion():
+def test_conic_invariants_are_invariant_under_rigid_motion() -> None:
     """I_p and the regression I_c1, I_c2 from local fits do not depend on the frame."""
     curve = CanonicalCurve(CurveKind.HYPERBOLA, (1.2, 0.9))
     points = sample_by_arc_length(curve, -1.0, 0.5, SPACING).points
@@ -128,7 +137,7 @@ def test_conic_invariants_are_invariant_under_rigid_motion():
 
 
 @pytest.mark.parametrize("kind", [CurveKind.HYPERBOLA, CurveKind.CUBICAL_PARABOLA])
-def test_recognition_is_invariant_under_reparametrisation(kind):
+def test_recognition_is_invariant_under_reparametrisation(kind: CurveKind) -> None:
     """Other samples of the same curve (shifted start, other spacing, reversed traversal)
     give the same class and shape within the estimation tolerance."""
     params, (t0, t1), rtol, _ = CASES[kind]
@@ -147,7 +156,7 @@ def test_recognition_is_invariant_under_reparametrisation(kind):
 # --- errors ------------------------------------------------------------------------------
 
 
-def test_straight_segment_raises_degenerate_geometry():
+def test_straight_segment_raises_degenerate_geometry() -> None:
     s = np.linspace(0.0, 1.0, 80)
     points = np.column_stack([0.3 + 0.8 * s, -1.0 + 0.6 * s])
     with pytest.raises(DegenerateGeometry, match="straight segment"):
@@ -169,17 +178,22 @@ def test_straight_segment_raises_degenerate_geometry():
         ([0.1, 0.2, 0.3], [0.0, 0.1, 0.2], [0.0, np.nan, 0.2], "dphi must hold 3"),
     ],
 )
-def test_bad_kappa_raises_invalid_curve_data(kappa, kappa_s, dphi, message):
+def test_bad_kappa_raises_invalid_curve_data(
+    kappa: Sequence[float],
+    kappa_s: Sequence[float],
+    dphi: Sequence[float] | None,
+    message: str,
+) -> None:
     with pytest.raises(InvalidCurveData, match=message):
         recognize_curve(kappa, kappa_s, dphi)
 
 
-def test_non_positive_tolerance_is_rejected():
+def test_non_positive_tolerance_is_rejected() -> None:
     with pytest.raises(InvalidCurveData, match="tolerance must be positive"):
         recognize_curve([0.1, 0.2, 0.3], [0.0, 0.1, 0.2], tolerance=0.0)
 
 
-def test_slope_quartic_without_real_root_on_a_circle():
+def test_slope_quartic_without_real_root_on_a_circle() -> None:
     """Two contacts on a circle (kappa_s = 0) turning by less than arctan(sqrt(5)/2) leave
     the cubical-parabola quartic (3.31) = 3 kappa^4 delta (1 + l^2)(5 l^2 + 4 delta l + 1)
     with discriminant 16 delta^2 - 20 < 0: no real slope."""
@@ -194,7 +208,7 @@ def test_slope_quartic_without_real_root_on_a_circle():
         inv.real_slopes(d)
 
 
-def test_fit_class_needs_tangent_rotations_for_cubic_classes():
+def test_fit_class_needs_tangent_rotations_for_cubic_classes() -> None:
     curve = CanonicalCurve(CurveKind.ELLIPSE, (2.0, 1.0))
     t = np.linspace(0.2, 1.2, 6)
     fit = fit_class(CurveKind.CUBICAL_PARABOLA, curve.kappa(t), curve.kappa_s(t))

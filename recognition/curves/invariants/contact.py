@@ -37,7 +37,9 @@ def contact_parameter(
 ) -> np.ndarray:
     """Parameter t of each contact on the canonical curve, thesis Section 3.3.1.
 
-    With the corrections of THESIS_ERRATA item 5:
+    The formulas invert thesis Eqs. (3.5)-(3.6) (parabola), (3.16) (ellipse and its
+    hyperbolic counterpart), (3.26) (cubical parabola), the semi-cubical slope and (3.41)
+    (cubic spline), with the corrections of THESIS_ERRATA item 5:
 
     * parabola: ``t = kappa_s / (3 kappa^2)``;
     * ellipse: ``t0 = arcsin(sqrt(((ab/|kappa|)^(2/3) - b^2) / (a^2 - b^2)))`` is right

@@ -205,7 +205,7 @@ def _spline_guesses(data: ContactData, n_psi: int = 120, n_t: int = 32) -> list[
 
     For each rotation psi (slopes lam_i = tan(phi_i + psi)), orientation and t_j on a
     log grid, (a, b, c) follow from a reference contact j (errata item 7); every other
-    contact's t solves the slope equation (3.39) and its exact kappa, kappa_s are
+    contact's t solves the slope equation, thesis Eq. (3.39), and its exact kappa, kappa_s are
     compared with the measured ones. References are the contacts at a quarter, half and
     three quarters of the data and the two of largest |kappa| (a contact near an
     inflection is ill-conditioned); in each band of psi the best cell is kept.
