@@ -18,6 +18,9 @@ from numpy.typing import ArrayLike
 from recognition.errors import InvalidCurveData
 
 __all__ = [
+    "N_PARAMETERS",
+    "SLOPE_CLASSES",
+    "TREE_CLASSES",
     "CanonicalCurve",
     "CurveKind",
     "canonical_derivatives",
@@ -39,6 +42,22 @@ class CurveKind(StrEnum):
     QUARTIC = "quartic"  # a curve of no class, for negative tests
     UNCLASSIFIED = "unclassified"
 
+
+#: The classes of the recognition tree, in the order it tests them (simplest first).
+TREE_CLASSES = (
+    CurveKind.PARABOLA,
+    CurveKind.ELLIPSE,
+    CurveKind.HYPERBOLA,
+    CurveKind.CUBICAL_PARABOLA,
+    CurveKind.SEMICUBICAL_PARABOLA,
+    CurveKind.CUBIC_SPLINE,
+)
+#: The cubic classes of the tree, whose invariants need the slope at each contact.
+SLOPE_CLASSES = (
+    CurveKind.CUBICAL_PARABOLA,
+    CurveKind.SEMICUBICAL_PARABOLA,
+    CurveKind.CUBIC_SPLINE,
+)
 
 #: Number of shape parameters of each canonical form.
 N_PARAMETERS: dict[CurveKind, int] = {

@@ -7,25 +7,14 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import ArrayLike
 
-from recognition.curves.families import N_PARAMETERS, CurveKind
+from recognition.curves.families import N_PARAMETERS, SLOPE_CLASSES, TREE_CLASSES, CurveKind
 from recognition.curves.invariants.spline import cubic_spline_l_m
 from recognition.errors import DegenerateGeometry, InvalidCurveData
 
-__all__ = ["CONTACT_CLASSES", "DEGENERATE_CIRCLE_TOL", "contact_parameter"]
+__all__ = ["DEGENERATE_CIRCLE_TOL", "contact_parameter"]
 
 #: An ellipse with |a^2 - b^2| below this fraction of a^2 is a circle.
 DEGENERATE_CIRCLE_TOL = 1e-12
-
-
-#: The classes with a contact parameter formula.
-CONTACT_CLASSES = (
-    CurveKind.PARABOLA,
-    CurveKind.ELLIPSE,
-    CurveKind.HYPERBOLA,
-    CurveKind.CUBICAL_PARABOLA,
-    CurveKind.SEMICUBICAL_PARABOLA,
-    CurveKind.CUBIC_SPLINE,
-)
 
 
 def contact_parameter(
@@ -78,10 +67,10 @@ def contact_parameter(
     kind = CurveKind(kind)
     kappa = np.asarray(kappa, dtype=float)
     kappa_s = np.asarray(kappa_s, dtype=float)
-    if kind in (CurveKind.CUBICAL_PARABOLA, CurveKind.SEMICUBICAL_PARABOLA, CurveKind.CUBIC_SPLINE):
+    if kind in SLOPE_CLASSES:
         if lam is None:
             raise InvalidCurveData(f"the contact parameter of a {kind} needs the slopes lam")
-    if kind not in CONTACT_CLASSES:
+    if kind not in TREE_CLASSES:
         raise InvalidCurveData(f"{kind} has no contact parameter formula (Section 3.3.1)")
     expected = N_PARAMETERS[kind]
     if len(params) != expected:

@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from recognition.curves import invariants as inv
-from recognition.curves.families import CurveKind
+from recognition.curves.families import SLOPE_CLASSES, CurveKind
 from recognition.curves.recognition.results import ClassFit
 from recognition.curves.recognition.signature_fit import (
     ContactData,
@@ -27,7 +27,6 @@ from recognition.curves.recognition.signature_fit import (
 from recognition.errors import DegenerateGeometry, InvalidCurveData, NoRealSolution
 
 __all__ = [
-    "NEEDS_SLOPE",
     "SMALL_KAPPA_FRACTION",
     "SPLINE_PSI_BANDS",
     "SPLINE_REFINED",
@@ -42,9 +41,6 @@ __all__ = [
 #: Estimates whose |kappa| is below this fraction of the largest are left out of the
 #: conic invariants, which divide by kappa (inflections are not conic points).
 SMALL_KAPPA_FRACTION = 1e-3
-
-#: The classes whose invariants need the tangent rotations.
-NEEDS_SLOPE = {CurveKind.CUBICAL_PARABOLA, CurveKind.SEMICUBICAL_PARABOLA, CurveKind.CUBIC_SPLINE}
 
 
 def fit_parabola(data: ContactData) -> ClassFit:
@@ -287,7 +283,7 @@ def fit_cubic_spline(data: ContactData) -> ClassFit:
 def fit_hypothesis(kind: CurveKind, data: ContactData) -> ClassFit:
     """Test one class on the data: its initial hypotheses, refined; rejected without
     tangent rotations when the class needs them."""
-    if kind in NEEDS_SLOPE and data.phi is None:
+    if kind in SLOPE_CLASSES and data.phi is None:
         return rejected(kind, "needs the tangent rotations dphi")
     if kind is CurveKind.PARABOLA:
         return fit_parabola(data)

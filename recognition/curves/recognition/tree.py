@@ -10,14 +10,13 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from recognition.curves.estimation import LocalGeometry, local_fit_geometry
-from recognition.curves.families import N_PARAMETERS, CurveKind
+from recognition.curves.families import N_PARAMETERS, TREE_CLASSES, CurveKind
 from recognition.curves.recognition.hypotheses import fit_hypothesis
 from recognition.curves.recognition.results import ClassFit, CurveRecognition
 from recognition.curves.recognition.signature_fit import ContactData, best_fit, contact_data
 from recognition.errors import DegenerateGeometry, InvalidCurveData
 
 __all__ = [
-    "CLASS_ORDER",
     "COMPLEXITY_FACTOR",
     "DEFAULT_TOLERANCE",
     "MAX_OUTLIER_FRACTION",
@@ -33,15 +32,6 @@ DEFAULT_TOLERANCE = 0.02
 #: A more complex class must fit this many times better to be preferred.
 COMPLEXITY_FACTOR = 3.0
 
-#: The classes in the order the tree tests them.
-CLASS_ORDER = (
-    CurveKind.PARABOLA,
-    CurveKind.ELLIPSE,
-    CurveKind.HYPERBOLA,
-    CurveKind.CUBICAL_PARABOLA,
-    CurveKind.SEMICUBICAL_PARABOLA,
-    CurveKind.CUBIC_SPLINE,
-)
 
 #: A point whose residual exceeds this multiple of the median is an estimation outlier.
 OUTLIER_FACTOR = 5.0
@@ -138,7 +128,7 @@ def recognize_curve(
         raise DegenerateGeometry(
             "the tangent does not turn: a straight segment has no curvature invariants"
         )
-    fits = [_fit_with_outliers(k, data) for k in CLASS_ORDER]
+    fits = [_fit_with_outliers(k, data) for k in TREE_CLASSES]
 
     chosen: ClassFit | None = None
     best = best_fit(fits)
