@@ -1,5 +1,4 @@
-"""Invariants of the cubical and semi-cubical parabolas and their slope quartics, thesis
-Sections 3.2.2.1-3.2.2.2."""
+"""Cubical and semi-cubical parabola invariants and slope quartics, thesis Sections 3.2.2.1-2."""
 
 from __future__ import annotations
 

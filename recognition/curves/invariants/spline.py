@@ -1,5 +1,4 @@
-"""Closed forms of the cubic spline (3.35) at a contact: g, c and the shape from one contact,
-thesis Section 3.2.2.3."""
+"""Closed forms of the cubic spline (3.35) at a contact: g, c, the shape from one contact."""
 
 from __future__ import annotations
 
