@@ -16,7 +16,6 @@ from recognition.curves.recognition import (
 from recognition.curves.sampling import (
     SampledCurve,
     random_curve,
-    random_rigid_motion,
     sample_by_arc_length,
 )
 
@@ -31,7 +30,6 @@ __all__ = [
     "invariants",
     "local_fit_geometry",
     "random_curve",
-    "random_rigid_motion",
     "recognize_curve",
     "recognize_points",
     "reduction",

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
+from numpy.typing import ArrayLike
 
 from recognition.errors import InvalidCurveData
 
@@ -64,6 +65,7 @@ class LocalGeometry:
     kappa_s: np.ndarray
 
     def __len__(self) -> int:
+        """Number of estimates m."""
         return self.kappa.size
 
     @property
@@ -71,7 +73,7 @@ class LocalGeometry:
         """Tangent rotation from the first estimate, phi - phi[0] (the thesis's Delta phi)."""
         return self.phi - self.phi[0]
 
-    def subset(self, indices) -> LocalGeometry:
+    def subset(self, indices: ArrayLike) -> LocalGeometry:
         """The estimates at ``indices`` (positions into this object, not input indices)."""
         idx = np.asarray(indices)
         return LocalGeometry(
@@ -84,7 +86,7 @@ class LocalGeometry:
         )
 
 
-def validate_points(points, min_points: int) -> np.ndarray:
+def validate_points(points: ArrayLike, min_points: int) -> np.ndarray:
     """Check ordered planar tactile points and return them as an (n, 2) float array.
 
     Raises :class:`InvalidCurveData` for a wrong shape, fewer than ``min_points``
@@ -125,14 +127,14 @@ def validate_points(points, min_points: int) -> np.ndarray:
     return p
 
 
-def _central_difference_weights(h0, h1):
+def _central_difference_weights(h0: np.ndarray, h1: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Weights of f(s - h0), f(s), f(s + h1) for the first and second derivative at s."""
     first = np.stack([-h1 / (h0 * (h0 + h1)), (h1 - h0) / (h0 * h1), h0 / (h1 * (h0 + h1))])
     second = np.stack([2 / (h0 * (h0 + h1)), -2 / (h0 * h1), 2 / (h1 * (h0 + h1))])
     return first, second
 
 
-def finite_difference_geometry(points, phi=None) -> LocalGeometry:
+def finite_difference_geometry(points: ArrayLike, phi: ArrayLike | None = None) -> LocalGeometry:
     """kappa and kappa_s by the central differences of thesis Section 3.4.
 
     ``kappa ~ (phi(s + ds) - phi(s - ds)) / (2 ds)`` and
@@ -153,22 +155,24 @@ def finite_difference_geometry(points, phi=None) -> LocalGeometry:
     index = np.arange(p.shape[0])
     if phi is None:
         chord = p[2:] - p[:-2]
-        phi = np.arctan2(chord[:, 1], chord[:, 0])
+        angles = np.arctan2(chord[:, 1], chord[:, 0])
         s, index = s[1:-1], index[1:-1]
     else:
-        phi = np.asarray(phi, dtype=float)
-        if phi.shape != (p.shape[0],) or not np.all(np.isfinite(phi)):
-            raise InvalidCurveData(f"phi must be {p.shape[0]} finite angles, got {phi.shape}")
-    phi = np.unwrap(phi)
+        angles = np.asarray(phi, dtype=float)
+        if angles.shape != (p.shape[0],) or not np.all(np.isfinite(angles)):
+            raise InvalidCurveData(f"phi must be {p.shape[0]} finite angles, got {angles.shape}")
+    angles = np.unwrap(angles)
     h0, h1 = np.diff(s)[:-1], np.diff(s)[1:]
     w1, w2 = _central_difference_weights(h0, h1)
-    stencil = np.stack([phi[:-2], phi[1:-1], phi[2:]])
+    stencil = np.stack([angles[:-2], angles[1:-1], angles[2:]])
     kappa = np.sum(w1 * stencil, axis=0)
     kappa_s = np.sum(w2 * stencil, axis=0)
-    return LocalGeometry(index[1:-1], p[index[1:-1]], s[1:-1] - s[1], phi[1:-1], kappa, kappa_s)
+    return LocalGeometry(index[1:-1], p[index[1:-1]], s[1:-1] - s[1], angles[1:-1], kappa, kappa_s)
 
 
-def _fit_windows(p: np.ndarray, window: int, degree: int):
+def _fit_windows(
+    p: np.ndarray, window: int, degree: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Least-squares polynomial fits v = y(u) over every window in its chord frame.
 
     Returns origin (m, 2), x axis (m, 2), y axis (m, 2), half chord scale (m,) and the
@@ -190,7 +194,9 @@ def _fit_windows(p: np.ndarray, window: int, degree: int):
     return origin, ex, ey, scale, coef
 
 
-def _simpson_arc_length(coef, scale, u1, panels: int = 4):
+def _simpson_arc_length(
+    coef: np.ndarray, scale: np.ndarray, u1: np.ndarray, panels: int = 4
+) -> np.ndarray:
     """Arc length of v = y(u) from u = 0 to u1 (unscaled) by composite Simpson's rule."""
     x = np.linspace(0.0, 1.0, 2 * panels + 1)[None, :] * (u1 / scale)[:, None]  # scaled u
     dcoef = coef[:, 1:] * np.arange(1, coef.shape[1])
@@ -202,7 +208,7 @@ def _simpson_arc_length(coef, scale, u1, panels: int = 4):
 
 
 def local_fit_geometry(
-    points,
+    points: ArrayLike,
     *,
     window: int = 15,
     degree: int = 3,

@@ -8,14 +8,19 @@ traversal in the direction of increasing ``t``.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from enum import StrEnum
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from recognition.errors import InvalidCurveData
 
 __all__ = [
+    "N_PARAMETERS",
+    "SLOPE_CLASSES",
+    "TREE_CLASSES",
     "CanonicalCurve",
     "CurveKind",
     "canonical_derivatives",
@@ -38,8 +43,24 @@ class CurveKind(StrEnum):
     UNCLASSIFIED = "unclassified"
 
 
+#: The classes of the recognition tree, in the order it tests them (simplest first).
+TREE_CLASSES = (
+    CurveKind.PARABOLA,
+    CurveKind.ELLIPSE,
+    CurveKind.HYPERBOLA,
+    CurveKind.CUBICAL_PARABOLA,
+    CurveKind.SEMICUBICAL_PARABOLA,
+    CurveKind.CUBIC_SPLINE,
+)
+#: The cubic classes of the tree, whose invariants need the slope at each contact.
+SLOPE_CLASSES = (
+    CurveKind.CUBICAL_PARABOLA,
+    CurveKind.SEMICUBICAL_PARABOLA,
+    CurveKind.CUBIC_SPLINE,
+)
+
 #: Number of shape parameters of each canonical form.
-N_PARAMETERS = {
+N_PARAMETERS: dict[CurveKind, int] = {
     CurveKind.PARABOLA: 1,
     CurveKind.ELLIPSE: 2,
     CurveKind.HYPERBOLA: 2,
@@ -50,7 +71,9 @@ N_PARAMETERS = {
 }
 
 
-def _polynomial_coefficients(kind: CurveKind, params) -> tuple[np.ndarray, np.ndarray]:
+def _polynomial_coefficients(
+    kind: CurveKind, params: Sequence[ArrayLike]
+) -> tuple[np.ndarray, np.ndarray]:
     """Coefficients (lowest degree first, last axis) of x(t) and y(t), polynomial classes.
 
     Each parameter may be a scalar or an array of a common shape S; the result has
@@ -58,6 +81,8 @@ def _polynomial_coefficients(kind: CurveKind, params) -> tuple[np.ndarray, np.nd
     """
     p = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in params))
     zero, one = np.zeros_like(p[0]), np.ones_like(p[0])
+    x: tuple[np.ndarray, ...]
+    y: tuple[np.ndarray, ...]
     if kind is CurveKind.PARABOLA:  # x = a t^2, y = 2 a t (Section 3.2.1.1)
         (a,) = p
         x, y = (zero, zero, a), (zero, 2.0 * a)
@@ -78,7 +103,9 @@ def _polynomial_coefficients(kind: CurveKind, params) -> tuple[np.ndarray, np.nd
     return np.stack(x, axis=-1), np.stack(y, axis=-1)
 
 
-def canonical_derivatives(kind: CurveKind, params, t) -> np.ndarray:
+def canonical_derivatives(
+    kind: CurveKind | str, params: Sequence[ArrayLike], t: ArrayLike
+) -> np.ndarray:
     """Position and first three derivatives of a canonical curve.
 
     Parameters
@@ -148,7 +175,8 @@ def tangent_angle(d: np.ndarray) -> np.ndarray:
 
 @dataclass(frozen=True)
 class CanonicalCurve:
-    """A curve of one class in its canonical form (thesis Sections 3.2.1-3.2.2).
+    """A curve of one class in its canonical form (thesis Sections 3.2.1-3.2.2; the cubic
+    spline is thesis Eq. (3.35)).
 
     Attributes
     ----------
@@ -160,7 +188,7 @@ class CanonicalCurve:
     kind: CurveKind
     params: tuple[float, ...]
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         object.__setattr__(self, "kind", CurveKind(self.kind))
         if self.kind is CurveKind.UNCLASSIFIED:
             raise InvalidCurveData("an unclassified curve has no canonical form")
@@ -171,27 +199,27 @@ class CanonicalCurve:
             )
         object.__setattr__(self, "params", tuple(float(p) for p in self.params))
 
-    def derivatives(self, t) -> np.ndarray:
+    def derivatives(self, t: ArrayLike) -> np.ndarray:
         """(4, 2, n) position and derivatives at ``t``; see :func:`canonical_derivatives`."""
         return canonical_derivatives(self.kind, self.params, np.atleast_1d(t))
 
-    def points(self, t) -> np.ndarray:
+    def points(self, t: ArrayLike) -> np.ndarray:
         """(n, 2) points alpha(t)."""
         return self.derivatives(t)[0].T
 
-    def kappa(self, t) -> np.ndarray:
+    def kappa(self, t: ArrayLike) -> np.ndarray:
         """Signed curvature at ``t``, Eq. (3.1)."""
         return curvature(self.derivatives(t))
 
-    def kappa_s(self, t) -> np.ndarray:
+    def kappa_s(self, t: ArrayLike) -> np.ndarray:
         """Arc-length derivative of curvature at ``t``, Eq. (3.2)."""
         return curvature_derivative(self.derivatives(t))
 
-    def phi(self, t) -> np.ndarray:
+    def phi(self, t: ArrayLike) -> np.ndarray:
         """Tangent angle at ``t`` (radians)."""
         return tangent_angle(self.derivatives(t))
 
-    def speed(self, t) -> np.ndarray:
+    def speed(self, t: ArrayLike) -> np.ndarray:
         """|alpha'(t)|."""
         d = self.derivatives(t)
         return np.hypot(d[1, 0], d[1, 1])

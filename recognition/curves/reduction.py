@@ -20,9 +20,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from recognition.curves.families import CanonicalCurve, CurveKind
 from recognition.errors import DegenerateGeometry, InvalidCurveData
+from recognition.rigid import apply_pose, pose_matrix, rotation_2d
 
 __all__ = [
     "CanonicalReduction",
@@ -69,18 +71,18 @@ class CanonicalReduction:
         """Canonical shape parameters."""
         return self.curve.params
 
-    def canonical_parameter(self, t) -> np.ndarray:
+    def canonical_parameter(self, t: ArrayLike) -> np.ndarray:
         """Canonical parameter u of the points with original parameter ``t``, same shape."""
         return self.u_scale * np.asarray(t, dtype=float) + self.u_offset
 
-    def points(self, t) -> np.ndarray:
+    def points(self, t: ArrayLike) -> np.ndarray:
         """(n, 2) points of the given curve at original parameters ``t``, via the canonical form."""
         q = self.curve.points(self.canonical_parameter(np.atleast_1d(t)))
-        T = self.T_data_from_canonical
-        return q @ T[:2, :2].T + T[:2, 2]
+        return apply_pose(self.T_data_from_canonical, q)
 
 
-def _check_finite(*coefficients) -> None:
+def _check_finite(*coefficients: float) -> None:
+    """Raise :class:`InvalidCurveData` unless every coefficient is a finite scalar."""
     values = np.asarray(coefficients, dtype=float)
     if values.shape != (len(coefficients),) or not np.all(np.isfinite(values)):
         raise InvalidCurveData(
@@ -88,12 +90,9 @@ def _check_finite(*coefficients) -> None:
         )
 
 
-def _rotation(theta: float) -> np.ndarray:
-    c, s = np.cos(theta), np.sin(theta)
-    return np.array([[c, -s], [s, c]])
-
-
-def _rotated(theta: float, x_coefficients, y_coefficients):
+def _rotated(
+    theta: float, x_coefficients: ArrayLike, y_coefficients: ArrayLike
+) -> tuple[np.ndarray, np.ndarray]:
     """Coefficients of x' = x cos + y sin and y' = -x sin + y cos (same degree order)."""
     c, s = np.cos(theta), np.sin(theta)
     x = np.asarray(x_coefficients, dtype=float)
@@ -101,22 +100,31 @@ def _rotated(theta: float, x_coefficients, y_coefficients):
     return c * x + s * y, -s * x + c * y
 
 
-def _reduction(kind, params, theta, origin_rotated, u_scale, u_offset) -> CanonicalReduction:
-    R = _rotation(theta)
-    T = np.eye(3)
-    T[:2, :2] = R
-    T[:2, 2] = R @ np.asarray(origin_rotated, dtype=float)
+def _reduction(
+    kind: CurveKind,
+    params: tuple[float, ...],
+    theta: float,
+    origin_rotated: ArrayLike,
+    u_scale: float,
+    u_offset: float,
+) -> CanonicalReduction:
+    """The reduction whose rotation is R(theta) and whose canonical origin sits at
+    ``R(theta) origin_rotated`` (the origin in the rotated frame)."""
+    R = rotation_2d(theta)
     return CanonicalReduction(
         CanonicalCurve(kind, tuple(float(p) for p in params)),
         float(theta),
-        T,
+        pose_matrix(R, R @ np.asarray(origin_rotated, dtype=float)),
         float(u_scale),
         float(u_offset),
     )
 
 
-def reduce_parabola(a2, a1, a0, b2, b1, b0) -> CanonicalReduction:
-    """Parabola ``x = a2 t^2 + a1 t + a0, y = b2 t^2 + b1 t + b0`` (3.4) in canonical form.
+def reduce_parabola(
+    a2: float, a1: float, a0: float, b2: float, b1: float, b0: float
+) -> CanonicalReduction:
+    """Parabola ``x = a2 t^2 + a1 t + a0, y = b2 t^2 + b1 t + b0``, thesis Eq. (3.4), in
+    canonical form.
 
     Thesis Section 3.2.1.1: rotate by ``theta`` with ``tan(theta) = b2 / a2`` so that y
     loses its ``t^2`` term, then reparametrise and translate to ``x = a u^2, y = 2 a u``
@@ -155,7 +163,9 @@ def reduce_parabola(a2, a1, a0, b2, b1, b0) -> CanonicalReduction:
     return _reduction(CurveKind.PARABOLA, (a,), theta, vertex, u_scale, A1 / B1)
 
 
-def reduce_cubical_parabola(a3, a1, a0, b3, b1, b0) -> CanonicalReduction:
+def reduce_cubical_parabola(
+    a3: float, a1: float, a0: float, b3: float, b1: float, b0: float
+) -> CanonicalReduction:
     """Cubical parabola ``x = a3 t^3 + a1 t + a0, y = b3 t^3 + b1 t + b0`` in canonical form.
 
     Thesis Section 3.2.2.1: rotate by ``theta = arctan(-a3 / b3)``, which cancels the
@@ -188,8 +198,11 @@ def reduce_cubical_parabola(a3, a1, a0, b3, b1, b0) -> CanonicalReduction:
     return _reduction(CurveKind.CUBICAL_PARABOLA, (B3 / A1**3, B1 / A1), theta, (A0, B0), A1, 0.0)
 
 
-def reduce_cubic_spline(a3, a2, a1, a0, b3, b2, b1, b0) -> CanonicalReduction:
-    """Cubic spline segment (3.25) in the canonical form (3.35), ``x = u^2``.
+def reduce_cubic_spline(
+    a3: float, a2: float, a1: float, a0: float, b3: float, b2: float, b1: float, b0: float
+) -> CanonicalReduction:
+    """Cubic spline segment, thesis Eq. (3.25), in the canonical form of thesis Eq. (3.35),
+    ``x = u^2``.
 
     Thesis Section 3.2.2.3 states that "proper rotation, translation, and
     reparametrization" give ``x = u^2, y = a u^3 + b u^2 + c u``; the steps are:
@@ -235,6 +248,7 @@ def reduce_cubic_spline(a3, a2, a1, a0, b3, b2, b1, b0) -> CanonicalReduction:
     a, b, c = sigma * B3 / A2**1.5, C2 / A2, sigma * C1 / root
     origin = (A0 + (A1 + A2 * t_v) * t_v, B0 + (B1 + (B2 + B3 * t_v) * t_v) * t_v)
     u_scale = sigma * root
+    params: tuple[float, ...]
     if c == 0.0:
         kind, params = CurveKind.SEMICUBICAL_PARABOLA, (a, b)
     else:
@@ -242,7 +256,9 @@ def reduce_cubic_spline(a3, a2, a1, a0, b3, b2, b1, b0) -> CanonicalReduction:
     return _reduction(kind, params, theta, origin, u_scale, -u_scale * t_v)
 
 
-def reduce_semicubical_parabola(a3, a2, a0, b3, b2, b0) -> CanonicalReduction:
+def reduce_semicubical_parabola(
+    a3: float, a2: float, a0: float, b3: float, b2: float, b0: float
+) -> CanonicalReduction:
     """Semi-cubical parabola ``x = a3 t^3 + a2 t^2 + a0, y = b3 t^3 + b2 t^2 + b0``.
 
     Thesis Section 3.2.2.2 gives the canonical form ``x = u^2, y = a u^3 + b u^2`` without

@@ -9,12 +9,11 @@ from scipy.integrate import cumulative_trapezoid
 
 from recognition.curves.families import CanonicalCurve, CurveKind
 from recognition.errors import InvalidCurveData
+from recognition.rigid import apply_pose
 
 __all__ = [
     "SampledCurve",
-    "apply_rigid_motion",
     "random_curve",
-    "random_rigid_motion",
     "sample_by_arc_length",
 ]
 
@@ -46,22 +45,7 @@ class SampledCurve:
     @property
     def true_points(self) -> np.ndarray:
         """(n, 2) noise-free points in the data frame."""
-        return apply_rigid_motion(self.T_data_from_canonical, self.curve.points(self.t))
-
-
-def random_rigid_motion(rng: np.random.Generator, translation_scale: float = 1.0) -> np.ndarray:
-    """A uniformly random planar rotation and a Gaussian translation, as a (3, 3) matrix."""
-    theta = rng.uniform(-np.pi, np.pi)
-    c, s = np.cos(theta), np.sin(theta)
-    T = np.eye(3)
-    T[:2, :2] = [[c, -s], [s, c]]
-    T[:2, 2] = rng.normal(scale=translation_scale, size=2)
-    return T
-
-
-def apply_rigid_motion(T: np.ndarray, points: np.ndarray) -> np.ndarray:
-    """Apply a (3, 3) homogeneous planar transform to (n, 2) points."""
-    return points @ T[:2, :2].T + T[:2, 2]
+        return apply_pose(self.T_data_from_canonical, self.curve.points(self.t))
 
 
 def sample_by_arc_length(
@@ -104,17 +88,20 @@ def sample_by_arc_length(
         )
     t = np.interp(s, s_fine, t_fine)
     T = np.eye(3) if T_data_from_canonical is None else np.asarray(T_data_from_canonical, float)
-    points = apply_rigid_motion(T, curve.points(t))
-    if noise_std > 0:
+    points = apply_pose(T, curve.points(t))
+    if noise_std > 0 and rng is not None:  # rng is not None: checked above
         points = points + rng.normal(scale=noise_std, size=points.shape)
     return SampledCurve(points, t, curve, T, float(noise_std))
 
 
-def _signed(rng, low, high):
+def _signed(rng: np.random.Generator, low: float, high: float) -> float:
+    """A magnitude uniform in [low, high) with a random sign."""
     return rng.choice([-1.0, 1.0]) * rng.uniform(low, high)
 
 
-def random_curve(kind: CurveKind | str, rng: np.random.Generator):
+def random_curve(
+    kind: CurveKind | str, rng: np.random.Generator
+) -> tuple[CanonicalCurve, float, float]:
     """A random curve of class ``kind`` and a parameter interval to sample it on.
 
     The shapes are drawn from fixed, documented ranges (unit-free; think centimetres),
@@ -140,6 +127,7 @@ def random_curve(kind: CurveKind | str, rng: np.random.Generator):
     ``c``. Returns ``(CanonicalCurve, t_start, t_end)``.
     """
     kind = CurveKind(kind)
+    params: tuple[float, ...]
     if kind is CurveKind.PARABOLA:
         params = (rng.uniform(0.5, 3.0),)
         t0 = rng.uniform(-2.0, 0.0)

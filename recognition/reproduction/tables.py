@@ -47,10 +47,11 @@ class TableResult:
         )
 
     def dumps(self) -> str:
+        """:meth:`to_json` as indented JSON text."""
         return json.dumps(self.to_json(), indent=2)
 
 
-def _finite(value):
+def _finite(value: Any) -> Any:
     """Replace NaN/inf by None recursively so the JSON is standard."""
     if isinstance(value, float) and not math.isfinite(value):
         return None
@@ -63,7 +64,8 @@ def _finite(value):
     return value
 
 
-def _cell(value, digits: int) -> str:
+def _cell(value: Any, digits: int) -> str:
+    """One Markdown cell: ``-`` for None and non-finite numbers."""
     if value is None:
         return "-"
     if isinstance(value, str):
@@ -75,14 +77,14 @@ def _cell(value, digits: int) -> str:
     return f"{value:.{digits}g}"
 
 
-def markdown_table(header: list[str], rows: list[list], digits: int = 5) -> str:
+def markdown_table(header: list[str], rows: list[list[Any]], digits: int = 5) -> str:
     """A Markdown table; numbers shown with ``digits`` significant digits."""
     lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
     lines += ["| " + " | ".join(_cell(v, digits) for v in row) + " |" for row in rows]
     return "\n".join(lines)
 
 
-def save_figure(fig, path: Path) -> Path:
+def save_figure(fig: Any, path: Path) -> Path:
     """Writes a matplotlib figure as a PNG (tight layout, 110 dpi), closes it, returns path."""
     import matplotlib.pyplot as plt
 

@@ -5,29 +5,39 @@ kappa and kappa_s are known (Eqs. (3.11)-(3.12)). Tolerances are stated per test
 the estimator's truncation error; the observed errors are 5-20 times smaller.
 """
 
+from collections.abc import Callable
+from typing import Any
+
 import numpy as np
 import pytest
 
-from recognition.curves.estimation import finite_difference_geometry, local_fit_geometry
+from recognition.curves.estimation import (
+    LocalGeometry,
+    finite_difference_geometry,
+    local_fit_geometry,
+)
 from recognition.curves.families import CanonicalCurve, CurveKind
-from recognition.curves.sampling import apply_rigid_motion, random_rigid_motion
+from recognition.curves.sampling import SampledCurve
 from recognition.curves.sampling import sample_by_arc_length as sample
 from recognition.errors import InvalidCurveData
+from recognition.rigid import apply_pose, random_planar_motion
 
 #: The most accurate local fit on exact data (used by the recognition tests too).
 EXACT_FIT = {"window": 11, "degree": 6, "kappa_window": None}
 
 
-def circle(r):
+def circle(r: float) -> CanonicalCurve:
     return CanonicalCurve(CurveKind.ELLIPSE, (r, r))
 
 
-def exact_at(sampled, geometry):
+def exact_at(
+    sampled: SampledCurve, geometry: LocalGeometry
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     t = sampled.t[geometry.index]
     return sampled.curve.kappa(t), sampled.curve.kappa_s(t), sampled.curve.phi(t)
 
 
-def relative_errors(sampled, geometry):
+def relative_errors(sampled: SampledCurve, geometry: LocalGeometry) -> tuple[float, float]:
     """max |kappa error| / max |kappa| and max |kappa_s error| / (max |kappa_s| + max kappa^2)."""
     kappa, kappa_s, _ = exact_at(sampled, geometry)
     kappa_scale = np.abs(kappa).max()
@@ -43,7 +53,7 @@ def relative_errors(sampled, geometry):
 
 @pytest.mark.parametrize("r", [0.02, 1.0, 30.0])
 @pytest.mark.parametrize("with_phi", [True, False])
-def test_finite_differences_on_a_circle_have_the_exact_chord_bias(r, with_phi):
+def test_finite_differences_on_a_circle_have_the_exact_chord_bias(r: float, with_phi: bool) -> None:
     """On a circle phi(s) is linear, so the only error is arc length taken as the chord:
     kappa_est = (1/r) (h/2r) / sin(h/2r) exactly, and kappa_s = 0 (rounding only)."""
     h = 0.02 * r
@@ -56,7 +66,7 @@ def test_finite_differences_on_a_circle_have_the_exact_chord_bias(r, with_phi):
     assert len(geometry) == sampled.t.size - (2 if with_phi else 4)
 
 
-def test_finite_differences_converge_at_second_order_on_an_ellipse():
+def test_finite_differences_converge_at_second_order_on_an_ellipse() -> None:
     """Central differences on phi(s): halving h divides the error by about 4."""
     curve = CanonicalCurve(CurveKind.ELLIPSE, (2.0, 1.0))
     errors = []
@@ -70,7 +80,7 @@ def test_finite_differences_converge_at_second_order_on_an_ellipse():
     assert 3.5 < s1 / s2 < 4.5
 
 
-def test_finite_differences_reject_bad_phi():
+def test_finite_differences_reject_bad_phi() -> None:
     sampled = sample(circle(1.0), 0.0, 1.0, 0.05)
     with pytest.raises(InvalidCurveData, match="phi must be"):
         finite_difference_geometry(sampled.points, phi=np.zeros(3))
@@ -82,7 +92,7 @@ def test_finite_differences_reject_bad_phi():
 
 
 @pytest.mark.parametrize("r", [0.02, 1.0, 30.0])
-def test_local_fit_on_circles_is_exact(r):
+def test_local_fit_on_circles_is_exact(r: float) -> None:
     """Degree-6 fits over 11 points at h = r/100: kappa to 1e-8 relative, kappa_s ~ 0;
     positions, tangent angles and arc length match the exact circle."""
     h = r / 100
@@ -96,7 +106,7 @@ def test_local_fit_on_circles_is_exact(r):
     np.testing.assert_allclose(np.diff(geometry.s), h, rtol=1e-8)
 
 
-def test_local_fit_on_an_ellipse_matches_exact_kappa_and_kappa_s():
+def test_local_fit_on_an_ellipse_matches_exact_kappa_and_kappa_s() -> None:
     """Degree-6 fits over 11 points at h = 0.01: truncation error O(h^5) in kappa and
     O(h^4) in kappa_s (observed 4e-9 and 5e-6 relative)."""
     curve = CanonicalCurve(CurveKind.ELLIPSE, (2.0, 1.0))
@@ -108,7 +118,7 @@ def test_local_fit_on_an_ellipse_matches_exact_kappa_and_kappa_s():
     assert kappa_s_error < 5e-5
 
 
-def test_thesis_estimator_has_second_order_fit_bias():
+def test_thesis_estimator_has_second_order_fit_bias() -> None:
     """The thesis's quadratic fits (degree 2, kappa(s) over 15 estimates): on a circle the
     quadratic cannot follow the arc, kappa is off by O((window h / r)^2) (about 1.2e-3 at
     h/r = 0.01) and halving h divides the error by 4."""
@@ -122,7 +132,7 @@ def test_thesis_estimator_has_second_order_fit_bias():
     assert 3.5 < errors[0] / errors[1] < 4.5
 
 
-def test_estimates_are_invariant_under_rigid_motion_and_odd_under_reversal():
+def test_estimates_are_invariant_under_rigid_motion_and_odd_under_reversal() -> None:
     """kappa, kappa_s and s do not depend on the frame; phi turns with it. Reversing the
     traversal flips kappa and leaves kappa_s unchanged."""
     rng = np.random.default_rng(40)
@@ -131,8 +141,8 @@ def test_estimates_are_invariant_under_rigid_motion_and_odd_under_reversal():
     for estimator in (local_fit_geometry, finite_difference_geometry):
         base = estimator(points)
         for _ in range(3):
-            T = random_rigid_motion(rng, translation_scale=10.0)
-            moved = estimator(apply_rigid_motion(T, points))
+            T = random_planar_motion(rng, translation_scale=10.0)
+            moved = estimator(apply_pose(T, points))
             scale = np.abs(base.kappa).max()
             np.testing.assert_allclose(moved.kappa, base.kappa, atol=1e-8 * scale)
             np.testing.assert_allclose(moved.kappa_s, base.kappa_s, atol=1e-6 * scale**2)
@@ -148,19 +158,21 @@ def test_estimates_are_invariant_under_rigid_motion_and_odd_under_reversal():
 
 
 @pytest.fixture
-def points():
+def points() -> np.ndarray:
     return sample(circle(1.0), 0.0, 1.5, 0.02).points
 
 
 @pytest.mark.parametrize("estimator", [local_fit_geometry, finite_difference_geometry])
-def test_wrong_shape_is_rejected(points, estimator):
+def test_wrong_shape_is_rejected(
+    points: np.ndarray, estimator: Callable[..., LocalGeometry]
+) -> None:
     with pytest.raises(InvalidCurveData, match=r"shape \(n, 2\)"):
         estimator(np.column_stack([points, points[:, 0]]))
     with pytest.raises(InvalidCurveData, match=r"shape \(n, 2\)"):
         estimator(points.ravel())
 
 
-def test_fewer_points_than_the_window_are_rejected(points):
+def test_fewer_points_than_the_window_are_rejected(points: np.ndarray) -> None:
     with pytest.raises(InvalidCurveData, match="at least 11 points"):
         local_fit_geometry(points[:10], **EXACT_FIT)
     # the thesis's estimator needs window + kappa_window - 1 points
@@ -169,7 +181,7 @@ def test_fewer_points_than_the_window_are_rejected(points):
 
 
 @pytest.mark.parametrize("estimator", [local_fit_geometry, finite_difference_geometry])
-def test_nan_is_rejected(points, estimator):
+def test_nan_is_rejected(points: np.ndarray, estimator: Callable[..., LocalGeometry]) -> None:
     bad = points.copy()
     bad[7, 1] = np.nan
     with pytest.raises(InvalidCurveData, match="point 7 is not finite"):
@@ -177,7 +189,9 @@ def test_nan_is_rejected(points, estimator):
 
 
 @pytest.mark.parametrize("estimator", [local_fit_geometry, finite_difference_geometry])
-def test_repeated_points_are_rejected(points, estimator):
+def test_repeated_points_are_rejected(
+    points: np.ndarray, estimator: Callable[..., LocalGeometry]
+) -> None:
     bad = np.insert(points, 20, points[20], axis=0)
     with pytest.raises(InvalidCurveData, match="points 20 and 21 repeat"):
         estimator(bad)
@@ -186,7 +200,9 @@ def test_repeated_points_are_rejected(points, estimator):
 
 
 @pytest.mark.parametrize("estimator", [local_fit_geometry, finite_difference_geometry])
-def test_unordered_points_are_rejected(points, estimator):
+def test_unordered_points_are_rejected(
+    points: np.ndarray, estimator: Callable[..., LocalGeometry]
+) -> None:
     shuffled = points[np.random.default_rng(41).permutation(len(points))]
     with pytest.raises(InvalidCurveData, match="not ordered"):
         estimator(shuffled)
@@ -206,6 +222,8 @@ def test_unordered_points_are_rejected(points, estimator):
         ({"step": 0}, "step must be"),
     ],
 )
-def test_bad_options_are_rejected(points, options, message):
+def test_bad_options_are_rejected(
+    points: np.ndarray, options: dict[str, Any], message: str
+) -> None:
     with pytest.raises(InvalidCurveData, match=message):
         local_fit_geometry(points, **options)

@@ -8,6 +8,8 @@ tolerances of 1e-9 leave several orders of magnitude for cancellation.
 The last part pins each item of ``THESIS_ERRATA.md``.
 """
 
+from collections.abc import Callable
+
 import numpy as np
 import pytest
 
@@ -24,9 +26,13 @@ from recognition.errors import DegenerateGeometry, InvalidCurveData, NoRealSolut
 
 N_SHAPES = 200
 RTOL = 1e-9
+#: kappa, kappa_s, phi and slope dy/dx of a batch of shapes, each (S, n).
+Geometry = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
 
 
-def exact_geometry(kind, params, t):
+def exact_geometry(
+    kind: CurveKind, params: tuple[np.ndarray, ...], t: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """kappa, kappa_s, phi and slope dy/dx at t (increasing t), batched over shapes.
 
     ``params`` is a tuple of (S,) arrays and ``t`` is (S, n); every result is (S, n).
@@ -35,25 +41,29 @@ def exact_geometry(kind, params, t):
     return curvature(d), curvature_derivative(d), tangent_angle(d), d[1, 1] / d[1, 0]
 
 
-def uniform(rng, low, high, size=N_SHAPES):
+def uniform(
+    rng: np.random.Generator, low: float, high: float, size: int | tuple[int, ...] = N_SHAPES
+) -> np.ndarray:
     return rng.uniform(low, high, size)
 
 
-def signed(rng, low, high, size=N_SHAPES):
+def signed(
+    rng: np.random.Generator, low: float, high: float, size: int | tuple[int, ...] = N_SHAPES
+) -> np.ndarray:
     return rng.choice([-1.0, 1.0], size) * rng.uniform(low, high, size)
 
 
 # --- Parabola, Section 3.2.1.1 ----------------------------------------------------------
 
 
-def parabola_sample(seed, n=6):
+def parabola_sample(seed: int, n: int = 6) -> tuple[np.ndarray, np.ndarray, Geometry]:
     rng = np.random.default_rng(seed)
     a = uniform(rng, 0.2, 5.0)
     t = rng.uniform(-3.0, 3.0, (N_SHAPES, n))
     return a, t, exact_geometry(CurveKind.PARABOLA, (a,), t)
 
 
-def test_parabola_curvature_and_derivative_closed_forms():
+def test_parabola_curvature_and_derivative_closed_forms() -> None:
     """(3.5) kappa = -1/(2a (t^2+1)^(3/2)) and (3.6) kappa_s = 3t/(4a^2 (t^2+1)^3)."""
     a, t, (kappa, kappa_s, _, _) = parabola_sample(1)
     A = a[:, None]
@@ -61,7 +71,7 @@ def test_parabola_curvature_and_derivative_closed_forms():
     np.testing.assert_allclose(kappa_s, 3 * t / (4 * A**2 * (t**2 + 1) ** 3), rtol=RTOL)
 
 
-def test_parabola_parameter_t_squared_from_kappa():
+def test_parabola_parameter_t_squared_from_kappa() -> None:
     """(3.7) t^2 = 1/(2a|kappa|)^(2/3) - 1 and (3.8) kappa_s^2 = 9t^2/(16a^4(t^2+1)^6)."""
     a, t, (kappa, kappa_s, _, _) = parabola_sample(2)
     A = a[:, None]
@@ -70,7 +80,7 @@ def test_parabola_parameter_t_squared_from_kappa():
     np.testing.assert_allclose(kappa_s**2, 9 * t**2 / (16 * A**4 * (t**2 + 1) ** 6), rtol=RTOL)
 
 
-def test_parabola_invariant_is_constant_and_gives_a():
+def test_parabola_invariant_is_constant_and_gives_a() -> None:
     """(3.9)-(3.10): I_p = (2a)^(-2/3) at every point; the parameter follows from it."""
     a, _, (kappa, kappa_s, _, _) = parabola_sample(3)
     i_p = inv.parabola_invariant(kappa, kappa_s)
@@ -82,7 +92,7 @@ def test_parabola_invariant_is_constant_and_gives_a():
     )
 
 
-def test_conic_invariants_on_parabola():
+def test_conic_invariants_on_parabola() -> None:
     """Section 3.2.1.4: I_c1 = 0 and I_c2 = (2a)^(-2/3) on a parabola."""
     a, _, (kappa, kappa_s, _, _) = parabola_sample(4, n=2)
     i_c1 = inv.conic_invariant_1(kappa[:, 0], kappa_s[:, 0], kappa[:, 1], kappa_s[:, 1])
@@ -98,7 +108,7 @@ def test_conic_invariants_on_parabola():
 # --- Ellipse and hyperbola, Sections 3.2.1.2-3.2.1.3 --------------------------------------
 
 
-def ellipse_sample(seed, n=6):
+def ellipse_sample(seed: int, n: int = 6) -> tuple[np.ndarray, np.ndarray, np.ndarray, Geometry]:
     rng = np.random.default_rng(seed)
     a = uniform(rng, 0.5, 5.0)
     b = a * uniform(rng, 0.2, 0.95)
@@ -108,14 +118,14 @@ def ellipse_sample(seed, n=6):
     return a, b, t, exact_geometry(CurveKind.ELLIPSE, (a, b), t)
 
 
-def hyperbola_sample(seed, n=6):
+def hyperbola_sample(seed: int, n: int = 6) -> tuple[np.ndarray, np.ndarray, np.ndarray, Geometry]:
     rng = np.random.default_rng(seed)
     a, b = uniform(rng, 0.3, 5.0), uniform(rng, 0.3, 5.0)
     t = rng.uniform(-2.0, 2.0, (N_SHAPES, n))
     return a, b, t, exact_geometry(CurveKind.HYPERBOLA, (a, b), t)
 
 
-def test_ellipse_curvature_and_derivative_closed_forms():
+def test_ellipse_curvature_and_derivative_closed_forms() -> None:
     """(3.11)-(3.12)."""
     a, b, t, (kappa, kappa_s, _, _) = ellipse_sample(5)
     A, B = a[:, None], b[:, None]
@@ -125,7 +135,7 @@ def test_ellipse_curvature_and_derivative_closed_forms():
     np.testing.assert_allclose(kappa_s, expected, rtol=RTOL, atol=1e-12 * np.abs(expected).max())
 
 
-def test_ellipse_sin_squared_and_signature():
+def test_ellipse_sin_squared_and_signature() -> None:
     """(3.16) sin^2 t from kappa, and the signature equation (3.17)."""
     a, b, t, (kappa, kappa_s, _, _) = ellipse_sample(6)
     A, B = a[:, None], b[:, None]
@@ -135,7 +145,7 @@ def test_ellipse_sin_squared_and_signature():
     np.testing.assert_allclose(inv.parabola_invariant(kappa, kappa_s), rhs, rtol=1e-8)
 
 
-def test_hyperbola_curvature_and_derivative_closed_forms():
+def test_hyperbola_curvature_and_derivative_closed_forms() -> None:
     """(3.21)-(3.22)."""
     a, b, t, (kappa, kappa_s, _, _) = hyperbola_sample(7)
     A, B = a[:, None], b[:, None]
@@ -145,7 +155,7 @@ def test_hyperbola_curvature_and_derivative_closed_forms():
     np.testing.assert_allclose(kappa_s, expected, rtol=RTOL, atol=1e-12 * np.abs(expected).max())
 
 
-def test_hyperbola_signature():
+def test_hyperbola_signature() -> None:
     """(3.23): I_p = (a^2 - b^2)/(ab)^(4/3) + 1/(ab kappa)^(2/3)."""
     a, b, _, (kappa, kappa_s, _, _) = hyperbola_sample(8)
     A, B = a[:, None], b[:, None]
@@ -154,7 +164,7 @@ def test_hyperbola_signature():
 
 
 @pytest.mark.parametrize("kind", [CurveKind.ELLIPSE, CurveKind.HYPERBOLA])
-def test_conic_invariants_and_shape_recovery(kind):
+def test_conic_invariants_and_shape_recovery(kind: CurveKind) -> None:
     """(3.19)-(3.20), (3.24): two-point invariants and the (a, b) recovery of 3.2.1.2-3."""
     if kind is CurveKind.ELLIPSE:
         a, b, _, (kappa, kappa_s, _, _) = ellipse_sample(9, n=2)
@@ -183,7 +193,7 @@ def test_conic_invariants_and_shape_recovery(kind):
 
 
 @pytest.mark.parametrize("kind", [CurveKind.ELLIPSE, CurveKind.HYPERBOLA, CurveKind.PARABOLA])
-def test_conic_invariants_regression_is_exact_on_conics(kind):
+def test_conic_invariants_regression_is_exact_on_conics(kind: CurveKind) -> None:
     """The regression form of (3.17)/(3.23) returns I_c1, I_c2 with zero residual."""
     rng = np.random.default_rng(10)
     for _ in range(20):
@@ -209,13 +219,13 @@ def test_conic_invariants_regression_is_exact_on_conics(kind):
         assert residual < 1e-10
 
 
-def test_conic_invariants_regression_rejects_constant_curvature():
+def test_conic_invariants_regression_rejects_constant_curvature() -> None:
     kappa = np.full(5, 0.5)
     with pytest.raises(DegenerateGeometry, match="different"):
         inv.conic_invariants_regression(kappa, np.zeros(5))
 
 
-def test_conic_parameter_recovery_rejects_wrong_sign():
+def test_conic_parameter_recovery_rejects_wrong_sign() -> None:
     with pytest.raises(DegenerateGeometry, match="I_c1 > 0"):
         inv.ellipse_parameters(-0.2, 1.0)
     with pytest.raises(DegenerateGeometry, match="I_c1 < 0"):
@@ -225,14 +235,14 @@ def test_conic_parameter_recovery_rejects_wrong_sign():
 # --- Cubical parabola, Section 3.2.2.1 ---------------------------------------------------
 
 
-def cubical_sample(seed, n=4):
+def cubical_sample(seed: int, n: int = 4) -> tuple[np.ndarray, np.ndarray, np.ndarray, Geometry]:
     rng = np.random.default_rng(seed)
     a, b = signed(rng, 0.3, 3.0), signed(rng, 0.2, 2.0)
     t = signed(rng, 0.1, 1.5, (N_SHAPES, n))
     return a, b, t, exact_geometry(CurveKind.CUBICAL_PARABOLA, (a, b), t)
 
 
-def test_cubical_parabola_closed_forms_and_slope():
+def test_cubical_parabola_closed_forms_and_slope() -> None:
     """kappa, kappa_s of x = t, y = a t^3 + b t, slope (3.26) and both in terms of lambda."""
     a, b, t, (kappa, kappa_s, _, lam) = cubical_sample(11)
     A, B = a[:, None], b[:, None]
@@ -246,7 +256,7 @@ def test_cubical_parabola_closed_forms_and_slope():
     np.testing.assert_allclose(kappa_s, ks_lam, rtol=1e-7, atol=1e-10 * np.abs(ks).max())
 
 
-def test_cubical_parabola_invariants_give_a_and_b():
+def test_cubical_parabola_invariants_give_a_and_b() -> None:
     """(3.27) I_cp1 = a and (3.28) I_cp2 = b at every point."""
     a, b, _, (kappa, kappa_s, _, lam) = cubical_sample(12)
     shape = kappa.shape
@@ -263,7 +273,7 @@ def test_cubical_parabola_invariants_give_a_and_b():
     )
 
 
-def test_slope_propagation_matches_the_printed_rational_form():
+def test_slope_propagation_matches_the_printed_rational_form() -> None:
     """(3.29): lambda2 = (lambda1 + delta)/(1 - lambda1 delta), delta = tan(phi2 - phi1)."""
     _, _, _, (_, _, phi, lam) = cubical_sample(13, n=2)
     dphi = phi[:, 1] - phi[:, 0]
@@ -275,7 +285,7 @@ def test_slope_propagation_matches_the_printed_rational_form():
     np.testing.assert_allclose(propagated[ok], printed[ok], rtol=1e-7)
 
 
-def quartic_value(d, lam):
+def quartic_value(d: np.ndarray, lam: float) -> tuple[float, float]:
     """Value and absolute scale of sum_k d_k lam^k."""
     powers = lam ** np.arange(5)
     return np.dot(d, powers), np.dot(np.abs(d), np.abs(powers))
@@ -288,7 +298,9 @@ def quartic_value(d, lam):
         (CurveKind.SEMICUBICAL_PARABOLA, inv.semicubical_parabola_slope_quartic),
     ],
 )
-def test_true_slope_is_a_root_of_the_slope_quartic(kind, quartic):
+def test_true_slope_is_a_root_of_the_slope_quartic(
+    kind: CurveKind, quartic: Callable[..., np.ndarray]
+) -> None:
     """(3.30)-(3.31) and (3.34): the true lambda1 is a real root of the quartic."""
     rng = np.random.default_rng(14)
     for _ in range(50):
@@ -313,14 +325,16 @@ def test_true_slope_is_a_root_of_the_slope_quartic(kind, quartic):
 # --- Semi-cubical parabola, Section 3.2.2.2 ----------------------------------------------
 
 
-def semicubical_sample(seed, n=4):
+def semicubical_sample(
+    seed: int, n: int = 4
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, Geometry]:
     rng = np.random.default_rng(seed)
     a, b = uniform(rng, 0.3, 3.0), signed(rng, 0.2, 2.0)
     t = rng.uniform(0.1, 1.5, (N_SHAPES, n))
     return a, b, t, exact_geometry(CurveKind.SEMICUBICAL_PARABOLA, (a, b), t)
 
 
-def test_semicubical_closed_forms_in_the_slope():
+def test_semicubical_closed_forms_in_the_slope() -> None:
     """lambda = 3at/2 + b and kappa(lambda), kappa_s(lambda) of Section 3.2.2.2 (t > 0)."""
     a, b, t, (kappa, kappa_s, _, lam) = semicubical_sample(15)
     A, B = a[:, None], b[:, None]
@@ -330,7 +344,7 @@ def test_semicubical_closed_forms_in_the_slope():
     np.testing.assert_allclose(kappa_s, ks, rtol=1e-7, atol=1e-10 * np.abs(ks).max())
 
 
-def test_semicubical_invariants_give_a_and_b():
+def test_semicubical_invariants_give_a_and_b() -> None:
     """(3.32) I_scp1 = a and (3.33) I_scp2 = b."""
     a, b, _, (kappa, kappa_s, _, lam) = semicubical_sample(16)
     shape = kappa.shape
@@ -350,14 +364,18 @@ def test_semicubical_invariants_give_a_and_b():
 # --- Cubic spline, Section 3.2.2.3 -------------------------------------------------------
 
 
-def spline_sample(seed, n=4):
+def spline_sample(
+    seed: int, n: int = 4
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, Geometry]:
     rng = np.random.default_rng(seed)
     a, b, c = uniform(rng, 0.3, 2.0), signed(rng, 0.2, 2.0), signed(rng, 0.2, 2.0)
     t = rng.uniform(0.1, 1.5, (N_SHAPES, n))
     return a, b, c, t, exact_geometry(CurveKind.CUBIC_SPLINE, (a, b, c), t)
 
 
-def spline_L_M(lam, kappa, kappa_s):
+def spline_L_M(
+    lam: np.ndarray, kappa: np.ndarray, kappa_s: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """L and M of Section 3.2.2.3."""
     return (
         2 * (1 + lam**2) ** 1.5 * kappa,
@@ -365,7 +383,7 @@ def spline_L_M(lam, kappa, kappa_s):
     )
 
 
-def test_spline_slope_curvature_and_derivative():
+def test_spline_slope_curvature_and_derivative() -> None:
     """(3.36)-(3.38) at points with t > 0."""
     a, b, c, t, (kappa, kappa_s, _, lam) = spline_sample(17)
     A, B, C = a[:, None], b[:, None], c[:, None]
@@ -380,7 +398,7 @@ def test_spline_slope_curvature_and_derivative():
     np.testing.assert_allclose(kappa_s, ks, rtol=1e-7, atol=1e-9 * np.abs(kappa_s).max())
 
 
-def test_spline_polynomial_equations_in_t():
+def test_spline_polynomial_equations_in_t() -> None:
     """(3.39)-(3.43): each polynomial in t vanishes at the contact's parameter."""
     a, b, c, t, (kappa, kappa_s, _, lam) = spline_sample(18)
     A, B, C = a[:, None], b[:, None], c[:, None]
@@ -398,7 +416,7 @@ def test_spline_polynomial_equations_in_t():
         assert np.all(np.abs(value) <= 1e-8 * scale), name
 
 
-def test_spline_resultant_g_vanishes_and_c_is_recovered():
+def test_spline_resultant_g_vanishes_and_c_is_recovered() -> None:
     """(3.44): g(a, b, lambda) = 0 at every contact; the formula after (3.44) gives c."""
     a, b, c, _, (kappa, kappa_s, _, lam) = spline_sample(19)
     A, B = a[:, None], b[:, None]
@@ -415,7 +433,7 @@ def test_spline_resultant_g_vanishes_and_c_is_recovered():
     np.testing.assert_allclose(c_est, np.broadcast_to(c[:, None], c_est.shape), rtol=1e-6)
 
 
-def test_spline_shape_from_one_contact_in_closed_form():
+def test_spline_shape_from_one_contact_in_closed_form() -> None:
     """Errata item 7: (lambda, kappa, kappa_s, t) at one contact fix (a, b, c)."""
     a, b, c, t, (kappa, kappa_s, _, lam) = spline_sample(20, n=1)
     est = inv.cubic_spline_from_contact(lam[:, 0], kappa[:, 0], kappa_s[:, 0], t[:, 0])
@@ -438,7 +456,7 @@ def test_spline_shape_from_one_contact_in_closed_form():
         CurveKind.CUBIC_SPLINE,
     ],
 )
-def test_contact_parameter_recovers_t(kind):
+def test_contact_parameter_recovers_t(kind: CurveKind) -> None:
     """Section 3.3.1 with errata item 5; the ellipse's t is recovered modulo pi.
 
     Reversing the traversal (kappa -> -kappa; kappa_s and the slope unchanged) leaves t
@@ -479,7 +497,7 @@ def test_contact_parameter_recovers_t(kind):
             np.testing.assert_allclose(reversed_, expected, rtol=1e-6, atol=1e-7)
 
 
-def test_contact_parameter_input_errors():
+def test_contact_parameter_input_errors() -> None:
     with pytest.raises(InvalidCurveData, match="slopes"):
         inv.contact_parameter(CurveKind.CUBIC_SPLINE, (1, 1, 1), [0.1], [0.1])
     with pytest.raises(InvalidCurveData, match="2 shape parameter"):
@@ -493,14 +511,14 @@ def test_contact_parameter_input_errors():
 # --- Slope quartic with no real root -----------------------------------------------------
 
 
-def test_real_slopes_raises_when_no_root_is_real():
+def test_real_slopes_raises_when_no_root_is_real() -> None:
     """(1 + l^2)(l^2 + l + 1): four complex roots, NoRealSolution."""
     d = np.polymul([1, 1, 1], [1, 0, 1])[::-1]  # lowest degree first
     with pytest.raises(NoRealSolution, match="no real root"):
         inv.real_slopes(d)
 
 
-def test_real_slopes_returns_the_two_real_roots_sorted():
+def test_real_slopes_returns_the_two_real_roots_sorted() -> None:
     """(1 + l^2)(l - 2)(l + 0.5) has exactly the real roots -0.5 and 2."""
     d = np.polymul(np.polymul([1, -2], [1, 0.5]), [1, 0, 1])[::-1]
     np.testing.assert_allclose(inv.real_slopes(d), [-0.5, 2.0], rtol=1e-12)
@@ -509,7 +527,7 @@ def test_real_slopes_returns_the_two_real_roots_sorted():
 # --- THESIS_ERRATA.md --------------------------------------------------------------------
 
 
-def test_errata_1_two_thirds_power_means_absolute_value():
+def test_errata_1_two_thirds_power_means_absolute_value() -> None:
     """Literal kappa**(2/3) is NaN for kappa < 0 (parabola, increasing t); |kappa|^(2/3) works."""
     a = 1.3
     curve = CanonicalCurve(CurveKind.PARABOLA, (a,))
@@ -531,7 +549,7 @@ def test_errata_1_two_thirds_power_means_absolute_value():
     )
 
 
-def test_errata_2_misplaced_bracket_before_3_20():
+def test_errata_2_misplaced_bracket_before_3_20() -> None:
     """The printed step kappa_s^2/(9 kappa^4 + 1) is wrong; with /(9 kappa^4) + 1 and in
     (3.20) itself the value is (a^2 + b^2)/(ab)^(4/3)."""
     a, b = 3.0, 1.4
@@ -550,7 +568,9 @@ def test_errata_2_misplaced_bracket_before_3_20():
 @pytest.mark.parametrize(
     "quartic", [inv.cubical_parabola_slope_quartic, inv.semicubical_parabola_slope_quartic]
 )
-def test_errata_3_quartics_factor_through_one_plus_lambda_squared(quartic):
+def test_errata_3_quartics_factor_through_one_plus_lambda_squared(
+    quartic: Callable[..., np.ndarray],
+) -> None:
     """d1 = d3 and d2 = d0 + d4: the quartic is (1 + l^2)(d4 l^2 + d3 l + d0)."""
     rng = np.random.default_rng(22)
     k1, s1, k2, s2 = rng.normal(size=(4, 100))
@@ -567,7 +587,7 @@ def test_errata_3_quartics_factor_through_one_plus_lambda_squared(quartic):
         )
 
 
-def test_errata_4_orientation_of_the_cubic_class_formulas():
+def test_errata_4_orientation_of_the_cubic_class_formulas() -> None:
     """On the t < 0 branch of x = t^2 (increasing t, heading to -x) the semi-cubical
     kappa(lambda), (3.37) and g change sign / fail; with kappa -> -kappa they hold.
     I_cp1, I_cp2, I_scp2 are unchanged by reversal."""
@@ -617,7 +637,7 @@ def test_errata_4_orientation_of_the_cubic_class_formulas():
         )
 
 
-def test_errata_5_contact_parameter_corrections():
+def test_errata_5_contact_parameter_corrections() -> None:
     """Printed ellipse arcsin is right only in the first quadrant, printed hyperbola
     arsinh gives |t|, and the cubical parabola's sign is sign(kappa / a)."""
     a, b = 3.0, 1.2
@@ -646,7 +666,7 @@ def test_errata_5_contact_parameter_corrections():
         np.testing.assert_allclose(got, t, rtol=1e-10)
 
 
-def test_errata_6_printed_parabola_reduction_is_four_times_a():
+def test_errata_6_printed_parabola_reduction_is_four_times_a() -> None:
     """Section 3.2.1.1 as printed gives 4a; see also tests/curves/test_reduction.py."""
     a, theta0, p = 0.8, 0.7, 1.3  # x = a (p t)^2, y = 2 a p t rotated by theta0
     X, Y = np.array([a * p * p, 0.0]), np.array([0.0, 2 * a * p])  # (t^2, t) coefficients
@@ -659,13 +679,15 @@ def test_errata_6_printed_parabola_reduction_is_four_times_a():
     assert printed == pytest.approx(4 * a, rel=1e-12)
 
 
-def spline_contacts(params, t):
+def spline_contacts(
+    params: tuple[float, float, float], t: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     curve = CanonicalCurve(CurveKind.CUBIC_SPLINE, params)
     d = curve.derivatives(t)
     return curve.kappa(t), curve.kappa_s(t), curve.phi(t), d[1, 1] / d[1, 0]
 
 
-def test_errata_7_g_fit_is_ambiguous_at_three_contacts():
+def test_errata_7_g_fit_is_ambiguous_at_three_contacts() -> None:
     """Two zero-cost (a, b, lambda1) with a > 0; only the true one gives one c everywhere."""
     params = (1.25, 0.55, 1.9)
     t = np.array([0.35, 0.8, 1.3])
@@ -688,7 +710,7 @@ def test_errata_7_g_fit_is_ambiguous_at_three_contacts():
     np.testing.assert_allclose(closed, params, rtol=1e-9)
 
 
-def test_g_fit_recovers_most_random_splines():
+def test_g_fit_recovers_most_random_splines() -> None:
     """Over well-spread contact triples the most consistent zero is the true shape."""
     rng = np.random.default_rng(23)
     recovered = 0
@@ -708,7 +730,7 @@ def test_g_fit_recovers_most_random_splines():
     assert recovered >= n - 2
 
 
-def test_g_fit_without_a_spline_raises():
+def test_g_fit_without_a_spline_raises() -> None:
     """Contacts of an ellipse leave no zero of g: most_consistent raises NoRealSolution."""
     ell = CanonicalCurve(CurveKind.ELLIPSE, (3.0, 1.2))
     t = np.array([0.3, 0.7, 1.1, 1.5, 1.9])
@@ -721,7 +743,7 @@ def test_g_fit_without_a_spline_raises():
         fit.most_consistent()
 
 
-def test_g_fit_input_errors():
+def test_g_fit_input_errors() -> None:
     rng = np.random.default_rng(0)
     with pytest.raises(InvalidCurveData, match="m >= 3"):
         inv.fit_cubic_spline_g([0.1, 0.2], [0.0, 0.1], [0.0, 0.1], rng=rng)
@@ -731,7 +753,7 @@ def test_g_fit_input_errors():
         inv.fit_cubic_spline_g([0.1, 0.0, 0.3], [0.0, 0.1, 0.2], [0.0, 0.1, 0.2], rng=rng)
 
 
-def test_errata_8_table_3_1_real_row():
+def test_errata_8_table_3_1_real_row() -> None:
     """Table 3.1 'real' row: parabola a = 4.852, ellipse (5.450, 2.293), hyperbola
     (3.131, 2.305); the shape parameters are given to 4 digits, so 1e-3 relative."""
     assert (2 * 4.852) ** (-2 / 3) == pytest.approx(0.2198, rel=1e-3)
@@ -743,7 +765,7 @@ def test_errata_8_table_3_1_real_row():
     assert (a * a - b * b) / (a * b) ** (4 / 3) == pytest.approx(0.3222, rel=1e-3)
 
 
-def test_table_3_4_real_row():
+def test_table_3_4_real_row() -> None:
     """Table 3.4: I_c1 = 0.373836 and I_c2 = 1.30145 for the ellipse a = 2.5, b = 1.75,
     evaluated from exact kappa, kappa_s at two points and inverted back to (a, b)."""
     curve = CanonicalCurve(CurveKind.ELLIPSE, (2.5, 1.75))

@@ -8,22 +8,24 @@ tree's consistency tolerance for such data. Recovered shape parameters are then 
 so the cases are few and fixed.
 """
 
+from collections.abc import Sequence
+
 import numpy as np
 import pytest
 
 from recognition.curves import (
     CanonicalCurve,
     CurveKind,
+    CurveRecognition,
     local_fit_geometry,
-    random_rigid_motion,
     recognize_curve,
     recognize_points,
     sample_by_arc_length,
 )
 from recognition.curves import invariants as inv
 from recognition.curves.recognition import canonical_parameters, fit_class
-from recognition.curves.sampling import apply_rigid_motion
 from recognition.errors import DegenerateGeometry, InvalidCurveData, NoRealSolution
+from recognition.rigid import apply_pose, random_planar_motion
 
 FIT = {"window": 11, "degree": 6, "kappa_window": None}
 TOLERANCE = 1e-4
@@ -41,13 +43,19 @@ CASES = {
 }
 
 
-def recognise(curve, t_start, t_end, T=None, spacing=SPACING):
+def recognise(
+    curve: CanonicalCurve,
+    t_start: float,
+    t_end: float,
+    T: np.ndarray | None = None,
+    spacing: float = SPACING,
+) -> tuple[CurveRecognition, np.ndarray]:
     sampled = sample_by_arc_length(curve, t_start, t_end, spacing, T_data_from_canonical=T)
     result, used = recognize_points(sampled.points, tolerance=TOLERANCE, **FIT)
     return result, sampled.t[used.index]
 
 
-def assert_contacts(kind, got, truth, atol):
+def assert_contacts(kind: CurveKind, got: np.ndarray, truth: np.ndarray, atol: float) -> None:
     """Contact parameters up to the curve's symmetries; NaN marks estimation outliers."""
     finite = np.isfinite(got)
     assert finite.sum() >= 0.8 * got.size
@@ -61,9 +69,9 @@ def assert_contacts(kind, got, truth, atol):
 
 
 @pytest.mark.parametrize("kind", list(CASES))
-def test_each_class_is_recognised_from_sampled_points(kind):
+def test_each_class_is_recognised_from_sampled_points(kind: CurveKind) -> None:
     params, (t0, t1), rtol, atol = CASES[kind]
-    T = random_rigid_motion(np.random.default_rng(60))
+    T = random_planar_motion(np.random.default_rng(60))
     result, t = recognise(CanonicalCurve(kind, params), t0, t1, T)
     assert result.kind is kind
     assert result.residual <= TOLERANCE
@@ -72,10 +80,10 @@ def test_each_class_is_recognised_from_sampled_points(kind):
     assert_contacts(kind, result.contact_parameters, t, atol)
 
 
-def test_a_quartic_is_unclassified():
+def test_a_quartic_is_unclassified() -> None:
     """x = t, y = a t^4 + b t^2 + c t belongs to no class of the tree."""
     curve = CanonicalCurve(CurveKind.QUARTIC, (1.0, -0.5, 0.3))
-    T = random_rigid_motion(np.random.default_rng(61))
+    T = random_planar_motion(np.random.default_rng(61))
     result, _ = recognise(curve, 0.3, 1.8, T)
     assert result.kind is CurveKind.UNCLASSIFIED
     assert result.parameters == {}
@@ -84,7 +92,7 @@ def test_a_quartic_is_unclassified():
 
 
 @pytest.mark.parametrize("kind", [CurveKind.ELLIPSE, CurveKind.SEMICUBICAL_PARABOLA])
-def test_recognition_is_invariant_under_rigid_motion(kind):
+def test_recognition_is_invariant_under_rigid_motion(kind: CurveKind) -> None:
     """The same samples placed by two random rigid motions give the same class, shape,
     invariants and contacts (the estimates agree to ~1e-10)."""
     params, (t0, t1), _, _ = CASES[kind]
@@ -92,8 +100,8 @@ def test_recognition_is_invariant_under_rigid_motion(kind):
     rng = np.random.default_rng(62)
     results = []
     for _ in range(2):
-        T = random_rigid_motion(rng, translation_scale=5.0)
-        results.append(recognize_points(apply_rigid_motion(T, points), tolerance=TOLERANCE, **FIT))
+        T = random_planar_motion(rng, translation_scale=5.0)
+        results.append(recognize_points(apply_pose(T, points), tolerance=TOLERANCE, **FIT))
     (first, used1), (second, used2) = results
     np.testing.assert_allclose(used1.kappa, used2.kappa, rtol=1e-7)
     assert first.kind is second.kind is kind
@@ -107,7 +115,7 @@ def test_recognition_is_invariant_under_rigid_motion(kind):
     np.testing.assert_allclose(first.contact_parameters, second.contact_parameters, atol=1e-6)
 
 
-def test_conic_invariants_are_invariant_under_rigid_motion():
+def test_conic_invariants_are_invariant_under_rigid_motion() -> None:
     """I_p and the regression I_c1, I_c2 from local fits do not depend on the frame."""
     curve = CanonicalCurve(CurveKind.HYPERBOLA, (1.2, 0.9))
     points = sample_by_arc_length(curve, -1.0, 0.5, SPACING).points
@@ -116,7 +124,7 @@ def test_conic_invariants_are_invariant_under_rigid_motion():
     base_c = inv.conic_invariants_regression(base.kappa, base.kappa_s)[:2]
     rng = np.random.default_rng(63)
     for _ in range(10):
-        moved = local_fit_geometry(apply_rigid_motion(random_rigid_motion(rng), points), **FIT)
+        moved = local_fit_geometry(apply_pose(random_planar_motion(rng), points), **FIT)
         np.testing.assert_allclose(
             inv.parabola_invariant(moved.kappa, moved.kappa_s), base_i_p, rtol=1e-6
         )
@@ -129,7 +137,7 @@ def test_conic_invariants_are_invariant_under_rigid_motion():
 
 
 @pytest.mark.parametrize("kind", [CurveKind.HYPERBOLA, CurveKind.CUBICAL_PARABOLA])
-def test_recognition_is_invariant_under_reparametrisation(kind):
+def test_recognition_is_invariant_under_reparametrisation(kind: CurveKind) -> None:
     """Other samples of the same curve (shifted start, other spacing, reversed traversal)
     give the same class and shape within the estimation tolerance."""
     params, (t0, t1), rtol, _ = CASES[kind]
@@ -139,7 +147,7 @@ def test_recognition_is_invariant_under_reparametrisation(kind):
     shift = 0.37 * SPACING * np.sign(t1 - t0) / float(curve.speed(t0)[0])
     samplings = [(t0 + shift, t1, 0.008), (t1, t0, SPACING)]
     for start, end, spacing in samplings:
-        result, _ = recognise(curve, start, end, random_rigid_motion(rng), spacing=spacing)
+        result, _ = recognise(curve, start, end, random_planar_motion(rng), spacing=spacing)
         assert result.kind is kind
         got = np.array(list(result.parameters.values()))
         np.testing.assert_allclose(got, truth, rtol=rtol)
@@ -148,7 +156,7 @@ def test_recognition_is_invariant_under_reparametrisation(kind):
 # --- errors ------------------------------------------------------------------------------
 
 
-def test_straight_segment_raises_degenerate_geometry():
+def test_straight_segment_raises_degenerate_geometry() -> None:
     s = np.linspace(0.0, 1.0, 80)
     points = np.column_stack([0.3 + 0.8 * s, -1.0 + 0.6 * s])
     with pytest.raises(DegenerateGeometry, match="straight segment"):
@@ -170,17 +178,22 @@ def test_straight_segment_raises_degenerate_geometry():
         ([0.1, 0.2, 0.3], [0.0, 0.1, 0.2], [0.0, np.nan, 0.2], "dphi must hold 3"),
     ],
 )
-def test_bad_kappa_raises_invalid_curve_data(kappa, kappa_s, dphi, message):
+def test_bad_kappa_raises_invalid_curve_data(
+    kappa: Sequence[float],
+    kappa_s: Sequence[float],
+    dphi: Sequence[float] | None,
+    message: str,
+) -> None:
     with pytest.raises(InvalidCurveData, match=message):
         recognize_curve(kappa, kappa_s, dphi)
 
 
-def test_non_positive_tolerance_is_rejected():
+def test_non_positive_tolerance_is_rejected() -> None:
     with pytest.raises(InvalidCurveData, match="tolerance must be positive"):
         recognize_curve([0.1, 0.2, 0.3], [0.0, 0.1, 0.2], tolerance=0.0)
 
 
-def test_slope_quartic_without_real_root_on_a_circle():
+def test_slope_quartic_without_real_root_on_a_circle() -> None:
     """Two contacts on a circle (kappa_s = 0) turning by less than arctan(sqrt(5)/2) leave
     the cubical-parabola quartic (3.31) = 3 kappa^4 delta (1 + l^2)(5 l^2 + 4 delta l + 1)
     with discriminant 16 delta^2 - 20 < 0: no real slope."""
@@ -195,7 +208,7 @@ def test_slope_quartic_without_real_root_on_a_circle():
         inv.real_slopes(d)
 
 
-def test_fit_class_needs_tangent_rotations_for_cubic_classes():
+def test_fit_class_needs_tangent_rotations_for_cubic_classes() -> None:
     curve = CanonicalCurve(CurveKind.ELLIPSE, (2.0, 1.0))
     t = np.linspace(0.2, 1.2, 6)
     fit = fit_class(CurveKind.CUBICAL_PARABOLA, curve.kappa(t), curve.kappa_s(t))

@@ -7,12 +7,15 @@ that reproduce every point of the given curve. Everything is polynomial arithmet
 O(1) coefficients, so relative tolerances of 1e-9 are generous.
 """
 
+from collections.abc import Callable, Sequence
+
 import numpy as np
 import pytest
 from numpy.polynomial import polynomial as P
 
 from recognition.curves.families import CurveKind
 from recognition.curves.reduction import (
+    CanonicalReduction,
     reduce_cubic_spline,
     reduce_cubical_parabola,
     reduce_parabola,
@@ -23,7 +26,9 @@ from recognition.errors import DegenerateGeometry, InvalidCurveData
 N_CURVES = 100
 
 
-def place(X, Y, rng):
+def place(
+    X: Sequence[float], Y: Sequence[float], rng: np.random.Generator
+) -> tuple[np.ndarray, np.ndarray]:
     """Rotate the coefficient vectors (lowest degree first) of (X, Y) and translate them.
 
     Returns x, y coefficients (length 4, lowest degree first).
@@ -37,7 +42,7 @@ def place(X, Y, rng):
     return x, y
 
 
-def assert_reproduces(reduction, x, y):
+def assert_reproduces(reduction: CanonicalReduction, x: np.ndarray, y: np.ndarray) -> None:
     """The reduction's rigid motion and parameter map reproduce the given curve."""
     T = reduction.T_data_from_canonical
     R = T[:2, :2]
@@ -50,7 +55,7 @@ def assert_reproduces(reduction, x, y):
     np.testing.assert_allclose(reduction.points(t), expected, atol=1e-11 * scale)
 
 
-def combine(coefficients, u):
+def combine(coefficients: Sequence[float], u: np.ndarray) -> np.ndarray:
     """sum_k coefficients[k] u^(k+1) as a polynomial in t (lowest degree first)."""
     total = np.zeros(1)
     for k, value in enumerate(coefficients, start=1):
@@ -58,13 +63,13 @@ def combine(coefficients, u):
     return total
 
 
-def reparametrisation(rng, shift=True):
+def reparametrisation(rng: np.random.Generator, shift: bool = True) -> np.ndarray:
     p = rng.choice([-1.0, 1.0]) * rng.uniform(0.3, 2.0)
     q = rng.normal() if shift else 0.0
     return np.array([q, p])  # u = q + p t, lowest degree first
 
 
-def test_parabola_reduction_recovers_a_and_the_placement():
+def test_parabola_reduction_recovers_a_and_the_placement() -> None:
     """Section 3.2.1.1 with THESIS_ERRATA item 6: a = B1^2 / (4 A2)."""
     rng = np.random.default_rng(30)
     for _ in range(N_CURVES):
@@ -80,7 +85,7 @@ def test_parabola_reduction_recovers_a_and_the_placement():
         assert abs(reduction.u_scale) == pytest.approx(abs(u[1]), rel=1e-10)
 
 
-def test_parabola_printed_formula_is_four_times_too_large():
+def test_parabola_printed_formula_is_four_times_too_large() -> None:
     """THESIS_ERRATA item 6: the printed a lacks the factor 4 in the denominator."""
     rng = np.random.default_rng(31)
     for _ in range(20):
@@ -96,7 +101,7 @@ def test_parabola_printed_formula_is_four_times_too_large():
         assert reduced == pytest.approx(a, rel=1e-10)
 
 
-def test_parabola_rotation_from_arctan_can_give_the_mirror_sign():
+def test_parabola_rotation_from_arctan_can_give_the_mirror_sign() -> None:
     """tan(theta) = b2 / a2 fixes theta only modulo pi: with arctan and a2 < 0 the
     denominator a2 cos + b2 sin is negative (a < 0, the parabola opening towards -x);
     atan2 keeps a > 0."""
@@ -108,13 +113,13 @@ def test_parabola_rotation_from_arctan_can_give_the_mirror_sign():
     assert_reproduces(reduction, np.array([0.0, a1, a2, 0.0]), np.array([0.0, b1, b2, 0.0]))
 
 
-def test_parabola_reduction_rejects_a_straight_line():
+def test_parabola_reduction_rejects_a_straight_line() -> None:
     """a2 b1 - a1 b2 = 0: x and y are affinely dependent, the curve is a line."""
     with pytest.raises(DegenerateGeometry, match="straight line"):
         reduce_parabola(2.0, 1.0, 0.0, 4.0, 2.0, 1.0)
 
 
-def test_cubical_parabola_reduction_recovers_a_b_and_the_placement():
+def test_cubical_parabola_reduction_recovers_a_b_and_the_placement() -> None:
     """Section 3.2.2.1: (a, b) from the printed formulas; u = (a1 cos + b1 sin) t."""
     rng = np.random.default_rng(32)
     for _ in range(N_CURVES):
@@ -130,7 +135,7 @@ def test_cubical_parabola_reduction_recovers_a_b_and_the_placement():
         assert_reproduces(reduction, x, y)
 
 
-def test_cubical_parabola_printed_rotation_is_right():
+def test_cubical_parabola_printed_rotation_is_right() -> None:
     """theta = arctan(-a3/b3) cancels the t^3 term of x' = x cos + y sin (the thesis's
     rotation convention), and the printed a, b follow with either branch of arctan."""
     rng = np.random.default_rng(33)
@@ -147,7 +152,7 @@ def test_cubical_parabola_printed_rotation_is_right():
             np.testing.assert_allclose((printed_a, printed_b), (a, b), rtol=1e-10, atol=1e-12)
 
 
-def test_cubical_parabola_reduction_handles_b3_zero_and_rejects_degenerate():
+def test_cubical_parabola_reduction_handles_b3_zero_and_rejects_degenerate() -> None:
     """b3 = 0 (where arctan(-a3/b3) is undefined) works; a3 b1 - a1 b3 = 0 raises."""
     reduction = reduce_cubical_parabola(2.0, 0.5, 0.0, 0.0, 1.0, 0.0)
     assert_reproduces(reduction, np.array([0.0, 0.5, 0.0, 2.0]), np.array([0.0, 1.0, 0.0, 0.0]))
@@ -155,7 +160,7 @@ def test_cubical_parabola_reduction_handles_b3_zero_and_rejects_degenerate():
         reduce_cubical_parabola(2.0, 1.0, 0.0, 4.0, 2.0, 0.0)
 
 
-def test_cubic_spline_reduction_recovers_a_b_c_and_the_placement():
+def test_cubic_spline_reduction_recovers_a_b_c_and_the_placement() -> None:
     """Section 3.2.2.3, Eq. (3.35): (a, b, c) up to the equivalence (a, b, c) ~ (-a, b, -c)."""
     rng = np.random.default_rng(34)
     for _ in range(N_CURVES):
@@ -170,7 +175,7 @@ def test_cubic_spline_reduction_recovers_a_b_c_and_the_placement():
         assert_reproduces(reduction, x, y)
 
 
-def test_semicubical_reduction_recovers_a_b_and_the_placement():
+def test_semicubical_reduction_recovers_a_b_and_the_placement() -> None:
     """Section 3.2.2.2: x = u^2, y = a u^3 + b u^2 (a > 0), from u = p t."""
     rng = np.random.default_rng(35)
     for _ in range(N_CURVES):
@@ -183,7 +188,7 @@ def test_semicubical_reduction_recovers_a_b_and_the_placement():
         assert_reproduces(reduction, x, y)
 
 
-def test_cubic_reductions_reject_degenerate_input():
+def test_cubic_reductions_reject_degenerate_input() -> None:
     with pytest.raises(DegenerateGeometry, match="a3 = b3 = 0"):
         reduce_cubic_spline(0.0, 1.0, 1.0, 0.0, 0.0, 2.0, 0.5, 0.0)
     with pytest.raises(DegenerateGeometry, match="cubical parabola"):
@@ -201,7 +206,9 @@ def test_cubic_reductions_reject_degenerate_input():
         (reduce_cubic_spline, 8),
     ],
 )
-def test_reductions_reject_non_finite_coefficients(reduce, n):
+def test_reductions_reject_non_finite_coefficients(
+    reduce: Callable[..., CanonicalReduction], n: int
+) -> None:
     coefficients = [1.0, 0.5, 0.0, 0.3, 2.0, 0.0, 1.0, 0.0][:n]
     coefficients[1] = np.nan
     with pytest.raises(InvalidCurveData, match="finite scalar"):
