@@ -59,7 +59,8 @@ class LinearSolve(StrEnum):
     """LU factorisation (the matrix must be regular)."""
     LEAST_NORM = "least_norm"
     """Least-norm solution from the symmetric eigendecomposition; directions whose
-    eigenvalue is below 1e-10 of the largest (exact symmetries of a model) take no step."""
+    eigenvalue is below ``least_norm_cutoff`` of the largest (exact symmetries of a model)
+    take no step."""
 
 
 class LeastSquaresStatus(StrEnum):
@@ -105,6 +106,9 @@ class LeastSquaresConfig:
         A kept step is doubled, up to 1024 times its length, while that lowers the cost
         further (large residuals make J^T J overestimate the cost's curvature).
     solve : LinearSolve
+    least_norm_cutoff : float
+        :attr:`LinearSolve.LEAST_NORM`: eigenvalues below this fraction of the largest
+        count as zero.
     """
 
     max_iterations: int = 100
@@ -120,6 +124,7 @@ class LeastSquaresConfig:
     retry: bool = False
     extend: bool = False
     solve: LinearSolve = LinearSolve.LU
+    least_norm_cutoff: float = 1e-10
 
 
 @dataclass(frozen=True)
@@ -166,14 +171,14 @@ def _damped(H: Array, lam: Array, config: LeastSquaresConfig) -> Array:
     return H + lam[:, None, None] * (D[:, :, None] * eye)
 
 
-def _solve(M: Array, rhs: Array, method: LinearSolve) -> Array:
+def _solve(M: Array, rhs: Array, config: LeastSquaresConfig) -> Array:
     """Solutions x of M x = rhs for a batch (B, n, n), (B, n)."""
-    if method is LinearSolve.LU:
+    if config.solve is LinearSolve.LU:
         return np.asarray(np.linalg.solve(M, rhs[..., None])[..., 0], dtype=np.float64)
     w, V = np.linalg.eigh(M)
     out = np.empty_like(rhs)
     for b in range(len(M)):  # the kept directions differ from problem to problem
-        keep = w[b] > 1e-10 * max(w[b, -1], 1e-300)
+        keep = w[b] > config.least_norm_cutoff * max(w[b, -1], 1e-300)
         Vk = V[b][:, keep]
         out[b] = Vk @ ((Vk.T @ rhs[b]) / w[b][keep])
     return out
@@ -187,7 +192,7 @@ def _steps(
     held: Callable[[State, Array], NDArray[np.bool_]] | None,
 ) -> Array:
     """The damped Gauss-Newton steps; components ``held`` at a bound are kept fixed."""
-    step = _solve(M, -g, config.solve)
+    step = _solve(M, -g, config)
     if held is None:
         return step
     fixed = np.asarray(held(state, step), bool)
@@ -196,7 +201,7 @@ def _steps(
         step[b] = 0.0
         if free.any():
             sub = M[b][np.ix_(free, free)][None]
-            step[b, free] = _solve(sub, -g[b, free][None], config.solve)[0]
+            step[b, free] = _solve(sub, -g[b, free][None], config)[0]
     return step
 
 

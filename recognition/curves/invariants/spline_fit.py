@@ -50,6 +50,7 @@ G_FIT_SOLVER = LeastSquaresConfig(
     rtol=0.0,
     step_tol=1e-13,
     solve=LinearSolve.LEAST_NORM,
+    least_norm_cutoff=1e-15,  # as numpy.linalg.pinv: the fit's directions differ in scale
 )
 
 
