@@ -195,7 +195,8 @@ def surface_normal(tangents: ArrayLike) -> Array:
 
 
 def normal_curvature(frame: CurveFrame, normal: Array) -> float:
-    """Normal curvature along a curve's tangent: -kappa (N_c . N), Meusnier's theorem.
+    """Normal curvature along a curve's tangent: -kappa (N_c . N), Meusnier's theorem: the
+    left-hand sides of thesis Eqs. (4.2)-(4.4).
 
     The thesis writes kappa (N_c . N) with N on the side the curve bends towards; with the
     outward normal the sign flips so that convex surfaces have positive curvature.

@@ -173,7 +173,8 @@ def recognize_points(
     estimator: Callable[..., LocalGeometry] = local_fit_geometry,
     **estimator_options: Any,
 ) -> tuple[CurveRecognition, LocalGeometry]:
-    """Estimate local geometry from ordered tactile points and run the recognition tree.
+    """Estimate local geometry from ordered tactile points and run the recognition tree
+    (thesis Fig. 3.4).
 
     ``n_estimates`` evenly spaced estimates (of all the estimator returns) are passed to
     :func:`recognize_curve` together with their tangent rotations.

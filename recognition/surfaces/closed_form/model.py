@@ -46,7 +46,8 @@ class ClosedFormModel:
 
     @classmethod
     def build(cls, surface: ClosedFormSurface, n_u: int = 200, n_v: int = 100) -> ClosedFormModel:
-        """The model of ``surface`` with its table on an ``n_u`` x ``n_v`` grid."""
+        """The model of ``surface`` with its table (4.7) on an ``n_u`` x ``n_v`` grid (thesis
+        Section 4.2.1)."""
         if n_u < 2 or n_v < 2:
             raise InvalidModel(f"a lookup table needs at least a 2 x 2 grid, got {n_u} x {n_v}")
         (u0, u1), (v0, v1) = surface.domain

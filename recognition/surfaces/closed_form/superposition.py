@@ -214,7 +214,8 @@ def initial_phi(
     samples: int = 72,
     bisection_steps: int = 24,
 ) -> tuple[float, float]:
-    """phi minimising E(u, v, .) by discretisation, bracketing and bisection (4.2.2.1).
+    """phi minimising E(u, v, .) (4.11) by discretisation, bracketing and bisection, thesis
+    Section 4.2.2.1.
 
     [0, 2 pi) is sampled at ``samples`` angles; every discrete local minimum brackets a
     minimum between its neighbours, in which the sign change of E_phi is bisected (all

@@ -175,7 +175,8 @@ def stack_columns(*columns: Parameter) -> Array:
 def outward_normal(
     surface: ClosedFormSurface, d: SigmaDerivatives, w: Array
 ) -> tuple[Array, Array]:
-    """Unit vector of ``w`` (..., 3) signed to agree with grad f at sigma, and the sign (..., 1)."""
+    """Unit vector of ``w`` (..., 3) signed to agree with grad f at sigma, and the sign (..., 1):
+    with w = sigma_u x sigma_v, the outward normal of thesis Eq. (4.10)."""
     g = surface.gradient(d.point.reshape(-1, 3)).reshape(d.point.shape)
     sign = np.where(np.sum(w * g, axis=-1, keepdims=True) < 0, -1.0, 1.0)
     norm = np.linalg.norm(w, axis=-1, keepdims=True)

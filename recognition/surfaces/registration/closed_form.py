@@ -138,7 +138,7 @@ def register_closed_form(
     geometry: LocalSurfaceGeometry,
     config: ClosedFormConfig = ClosedFormConfig(),
 ) -> ClosedFormRegistration:
-    """Register data curves onto a closed-form model (module docstring).
+    """Register data curves onto a closed-form model, thesis Eq. (4.12) (module docstring).
 
     ``geometry`` is the data's local geometry at p
     (:func:`~recognition.surfaces.registration.data.data_geometry` with

@@ -54,7 +54,8 @@ def model_frames(model: MeshModel, rows: IntArray) -> Array:
 def superposition_poses(
     model: MeshModel, rows: IntArray, geometry: LocalSurfaceGeometry, phis: Array
 ) -> tuple[Array, Array]:
-    """Poses (R, t) putting p on each table row's vertex, N on its normal, turned by phi.
+    """Poses (R, t) putting p on each table row's vertex, N on its normal (4.13), turned by
+    phi (thesis Section 4.3.3.1).
 
     Returns R (k, f, 3, 3), t (k, f, 3) mapping data-frame points to the model frame.
     """

@@ -98,7 +98,8 @@ def register_thesis(
     geometry: LocalSurfaceGeometry,
     config: ThesisConfig = ThesisConfig(),
 ) -> Registration:
-    """Thesis-mode registration of the curves on one mesh model (module docstring).
+    """Thesis-mode registration of the curves on one mesh model, thesis Eq. (4.16) (module
+    docstring).
 
     ``geometry`` is the data's local geometry at p
     (:func:`~recognition.surfaces.registration.data.data_geometry`).
