@@ -6,16 +6,13 @@ each column's least error on the diagonal.
 """
 
 import json
-import sys
 from dataclasses import replace
-from pathlib import Path
 
 import numpy as np
 import pytest
+from testing_scripts import load_script
 
 from recognition.reproduction import chapter4_closed_form as c4
-
-SCRIPTS = Path(__file__).resolve().parents[2] / "scripts"
 
 
 def test_worked_example_fig_4_5():
@@ -93,8 +90,7 @@ def test_tilted_planes_pass_through_p_at_the_requested_tilts():
 
 
 def test_script_lists_and_runs_the_chapter_4_tables(tmp_path):
-    sys.path.insert(0, str(SCRIPTS))
-    import reproduce_thesis as script
+    script = load_script("reproduce_thesis")
 
     config = script.parse_args(["--table", "all"])
     assert {"fig4.5", "4.2", "4.3", "4.5"} <= set(config.tables)
