@@ -1,6 +1,6 @@
 """scripts/probe.py end to end: probe, recognise, report, save; bad input exits 2."""
 
-from pathlib import Path
+import dataclasses
 
 import numpy as np
 import pytest
@@ -8,24 +8,22 @@ from scipy.spatial.transform import Rotation
 from testing_scripts import load_script
 
 from recognition import DataCurves
-
-ROOT = Path(__file__).resolve().parents[1]
+from tactile_sim.evaluation import pose_error
 
 
 def test_pose_error_is_the_rotation_angle_and_the_mean_displacement_of_the_data():
-    probe = load_script("probe")
     rng = np.random.default_rng(0)
     points = rng.normal(scale=0.01, size=(30, 3))
     T = np.eye(4)
     T[:3, :3] = Rotation.from_rotvec(rng.normal(size=3)).as_matrix()
     T[:3, 3] = (0.4, 0.1, 0.0)
-    assert probe.pose_error(T, T, points) == pytest.approx((0.0, 0.0), abs=1e-6)
+    assert pose_error(T, T, points) == pytest.approx((0.0, 0.0), abs=1e-6)
     shifted = T.copy()
     shifted[:3, 3] += (0.0, 0.0, 0.002)
-    assert probe.pose_error(shifted, T, points) == pytest.approx((0.0, 0.002), abs=1e-6)
+    assert pose_error(shifted, T, points) == pytest.approx((0.0, 0.002), abs=1e-6)
     turned = T.copy()
     turned[:3, :3] = Rotation.from_euler("z", 10, degrees=True).as_matrix() @ T[:3, :3]
-    angle, shift = probe.pose_error(turned, T, points)
+    angle, shift = pose_error(turned, T, points)
     assert angle == pytest.approx(10.0)
     assert 0 < shift < 0.01
 
@@ -34,7 +32,7 @@ def test_pose_error_is_the_rotation_angle_and_the_mean_displacement_of_the_data(
 def test_probing_an_object_recognises_it_and_saves_its_curves(tmp_path, capsys):
     probe = load_script("probe")
     config = probe.parse_args(["--object", "bird", "--seed", "1", "--rerun", "off"])
-    summary = probe.run(probe.Config(**{**vars(config), "out": tmp_path}))
+    summary = probe.run(dataclasses.replace(config, out=tmp_path))
     assert summary["recognized"] == "bird" and summary["correct"]
     assert summary["location_error_mm"] < 2.0
     ranking = [e for _, e in summary["ranking_mm"] if e is not None]

@@ -90,12 +90,13 @@ def test_tilted_planes_pass_through_p_at_the_requested_tilts():
 
 
 def test_script_lists_and_runs_the_chapter_4_tables(tmp_path):
-    script = load_script("reproduce_thesis")
+    from recognition.reproduction.reproduce import reproduce
 
+    script = load_script("reproduce_thesis")
     config = script.parse_args(["--table", "all"])
-    assert {"fig4.5", "4.2", "4.3", "4.5"} <= set(config.tables)
+    assert {"fig4.5", "4.2", "4.3", "4.5"} <= set(config.reproduction.tables)
     out = tmp_path / "fig4_5.json"
-    script.run(replace(script.parse_args(["--table", "fig4.5"]), json_path=out))
+    reproduce(replace(script.parse_args(["--table", "fig4.5"]).reproduction, json_path=out))
     payload = json.loads(out.read_text())
     assert payload["table"] == "fig4.5"
     assert payload["measured"]["k1_error_percent"] <= 2.0

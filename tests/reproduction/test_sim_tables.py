@@ -69,7 +69,7 @@ def test_sim_source_is_refused_for_tables_without_one(capsys):
 
 @pytest.mark.slow
 def test_traced_outline_points_lie_on_the_ellipse():
-    from tactile_sim.experiments import TraceConfig, trace_outlines
+    from tactile_sim.evaluation import TraceConfig, trace_outlines
 
     traces = trace_outlines(TraceConfig(trials=1, arc_length_m=0.01, spacing_m=1e-3))
     accuracy = traces.accuracy()
@@ -87,10 +87,14 @@ def test_traced_outline_points_lie_on_the_ellipse():
 
 @pytest.mark.slow
 def test_table_3_4_from_the_simulated_robot(tmp_path):
-    script = load_script("reproduce_thesis")
+    from recognition.reproduction.reproduce import ReproductionConfig
+    from tactile_sim.evaluation import ThesisTablesConfig, reproduce_thesis
+
     path = tmp_path / "table_3_4_sim.json"
-    config = script.Config(tables=("3.4",), json_path=path, source="sim", sim_trials=2)
-    (result,) = script.run(config)
+    config = ThesisTablesConfig(
+        ReproductionConfig(tables=("3.4",), json_path=path), source="sim", sim_trials=2
+    )
+    (result,) = reproduce_thesis(config)
     payload = json.loads(path.read_text())
     assert set(payload) >= {"table", "thesis", "measured"}
     assert payload["measured"]["source"] == "sim"
