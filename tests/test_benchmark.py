@@ -9,7 +9,9 @@ import signal
 import subprocess
 import sys
 import time
+from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 import pytest
 from testing_meshes import blob, ellipsoid
@@ -19,14 +21,14 @@ from recognition import evaluation as bench
 from recognition.surfaces.database import ModelDatabase
 from recognition.surfaces.registration import ClosedFormConfig, FastConfig
 from tactile_sim.cli import run_cli
-from tactile_sim.evaluation import SWEEPS, run
+from tactile_sim.evaluation import SWEEPS, BenchmarkConfig, run
 
 ROOT = Path(__file__).resolve().parents[1]
 SOURCE = bench.SyntheticSource(per_model=4, n_points=21, spacing_m=1.2e-3, separation_m=5e-3)
 
 
 @pytest.fixture(scope="module")
-def database_dir(tmp_path_factory) -> Path:
+def database_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
     database = ModelDatabase.from_meshes(
         {"blob": blob(subdivisions=4), "ellipsoid": ellipsoid(subdivisions=4)}, progress=False
     )
@@ -34,25 +36,29 @@ def database_dir(tmp_path_factory) -> Path:
 
 
 @pytest.fixture(scope="module")
-def jobs(database_dir):
+def jobs(database_dir: Path) -> list[bench.Job]:
     specs = SOURCE.specs(ModelDatabase.load(database_dir))
     assert len(specs) == 8
     return [bench.Job(spec, SOURCE, (FastConfig(),)) for spec in specs]
 
 
 @pytest.fixture(scope="module")
-def uninterrupted(database_dir, jobs, tmp_path_factory):
+def uninterrupted(
+    database_dir: Path, jobs: list[bench.Job], tmp_path_factory: pytest.TempPathFactory
+) -> list[bench.Record]:
     path = tmp_path_factory.mktemp("uninterrupted") / "records.jsonl"
     return bench.run(database_dir, jobs, path, progress=False)
 
 
-def _comparable(records):
+def _comparable(records: list[bench.Record]) -> list[dict[str, Any]]:
     return sorted(
         (bench.comparable(r) for r in records), key=lambda r: (r["instance"], r["method"])
     )
 
 
-def test_a_run_writes_one_record_per_instance_and_method(uninterrupted, jobs):
+def test_a_run_writes_one_record_per_instance_and_method(
+    uninterrupted: list[bench.Record], jobs: list[bench.Job]
+) -> None:
     assert len(uninterrupted) == len(jobs)
     assert {r.instance for r in uninterrupted} == {j.spec.key for j in jobs}
     settings = {r.settings for r in uninterrupted}
@@ -70,12 +76,12 @@ def test_a_run_writes_one_record_per_instance_and_method(uninterrupted, jobs):
 
 
 def test_interrupted_run_resumes_without_redoing_finished_instances(
-    database_dir, jobs, uninterrupted, tmp_path
-):
+    database_dir: Path, jobs: list[bench.Job], uninterrupted: list[bench.Record], tmp_path: Path
+) -> None:
     path = tmp_path / "records.jsonl"
     first: list[dict] = []
 
-    def stop_after_three(record):
+    def stop_after_three(record: bench.Record) -> None:
         first.append(record)
         if len(first) == 3:
             raise KeyboardInterrupt
@@ -91,8 +97,8 @@ def test_interrupted_run_resumes_without_redoing_finished_instances(
 
 
 def test_truncated_last_line_is_ignored_and_its_instance_redone(
-    database_dir, jobs, uninterrupted, tmp_path
-):
+    database_dir: Path, jobs: list[bench.Job], uninterrupted: list[bench.Record], tmp_path: Path
+) -> None:
     path = tmp_path / "records.jsonl"
     lines = [r.dumps() for r in uninterrupted[:2]]
     path.write_text("\n".join(lines) + "\n" + lines[0][: len(lines[0]) // 2])
@@ -102,7 +108,9 @@ def test_truncated_last_line_is_ignored_and_its_instance_redone(
     assert _comparable(records) == _comparable(uninterrupted)
 
 
-def test_other_settings_are_not_taken_for_done(database_dir, jobs, uninterrupted, tmp_path):
+def test_other_settings_are_not_taken_for_done(
+    database_dir: Path, jobs: list[bench.Job], uninterrupted: list[bench.Record], tmp_path: Path
+) -> None:
     path = tmp_path / "records.jsonl"
     path.write_text("".join(r.dumps() + "\n" for r in uninterrupted))
     other = [bench.Job(j.spec, j.source, (FastConfig(delta=20.0),)) for j in jobs[:2]]
@@ -128,8 +136,8 @@ bench.run(database, jobs, Path(sys.argv[2]), progress=False, on_record=slow)
 
 @pytest.mark.slow
 def test_benchmark_killed_halfway_finishes_without_redoing(
-    database_dir, jobs, uninterrupted, tmp_path
-):
+    database_dir: Path, jobs: list[bench.Job], uninterrupted: list[bench.Record], tmp_path: Path
+) -> None:
     path = tmp_path / "records.jsonl"
     process = subprocess.Popen(
         [sys.executable, "-c", _KILLED_RUN, str(database_dir), str(path)], cwd=ROOT
@@ -153,13 +161,15 @@ def test_benchmark_killed_halfway_finishes_without_redoing(
 
 
 @pytest.mark.slow
-def test_process_pool_gives_the_same_records(database_dir, jobs, uninterrupted, tmp_path):
+def test_process_pool_gives_the_same_records(
+    database_dir: Path, jobs: list[bench.Job], uninterrupted: list[bench.Record], tmp_path: Path
+) -> None:
     records = bench.run(database_dir, jobs, tmp_path / "records.jsonl", workers=2, progress=False)
     assert _comparable(records) == _comparable(uninterrupted)
 
 
 @pytest.fixture(scope="module")
-def ray_cluster():
+def ray_cluster() -> Iterator[str]:
     """A local Ray cluster of 2 CPUs on 127.0.0.1, its GCS address."""
     # Ray binds to the loopback address only when told that it cannot form a cluster
     # (read when ray is imported).
@@ -183,8 +193,12 @@ def ray_cluster():
 
 @pytest.mark.slow
 def test_ray_backend_gives_the_same_records_as_local(
-    ray_cluster, database_dir, jobs, uninterrupted, tmp_path
-):
+    ray_cluster: str,
+    database_dir: Path,
+    jobs: list[bench.Job],
+    uninterrupted: list[bench.Record],
+    tmp_path: Path,
+) -> None:
     records = bench.run(
         database_dir, jobs, tmp_path / "ray.jsonl", workers=2, backend="ray", progress=False
     )
@@ -208,8 +222,8 @@ bench.run(database, jobs, Path(sys.argv[2]), workers=2, backend="ray",
 
 @pytest.mark.slow
 def test_ray_address_connects_to_an_existing_cluster(
-    ray_cluster, database_dir, uninterrupted, tmp_path
-):
+    ray_cluster: str, database_dir: Path, uninterrupted: list[bench.Record], tmp_path: Path
+) -> None:
     path = tmp_path / "driver.jsonl"
     subprocess.run(
         [sys.executable, "-c", _RAY_DRIVER, str(database_dir), str(path), ray_cluster],
@@ -221,7 +235,7 @@ def test_ray_address_connects_to_an_existing_cluster(
 
 
 @pytest.mark.slow
-def test_simulated_instances_are_reproducible_and_recorded(tmp_path):
+def test_simulated_instances_are_reproducible_and_recorded(tmp_path: Path) -> None:
     from tactile_sim.evaluation import solids_experiment
 
     source = solids_experiment(objects=("sphere",), sessions_per_object=2, n_points=11)
@@ -245,7 +259,7 @@ def test_simulated_instances_are_reproducible_and_recorded(tmp_path):
     }
 
 
-def test_records_read_back_as_written(uninterrupted, tmp_path):
+def test_records_read_back_as_written(uninterrupted: list[bench.Record], tmp_path: Path) -> None:
     path = tmp_path / "records.jsonl"
     path.write_text("".join(r.dumps() + "\n" for r in uninterrupted))
     again = bench.read_results(path)
@@ -256,7 +270,7 @@ def test_records_read_back_as_written(uninterrupted, tmp_path):
     assert list(first)[-2:] == ["localization_error_mm", "settings"]
 
 
-def test_instance_facts_and_errors_are_kept_apart():
+def test_instance_facts_and_errors_are_kept_apart() -> None:
     failed = bench.Record(
         "cat/0",
         "cat",
@@ -304,14 +318,14 @@ print(" ".join(sorted(m for m in ("ray", "matplotlib", "mujoco", "tactile_sim", 
 """
 
 
-def test_importing_the_evaluation_layer_pulls_in_neither_ray_nor_matplotlib_nor_mujoco():
+def test_importing_the_evaluation_layer_pulls_in_neither_ray_nor_matplotlib_nor_mujoco() -> None:
     done = subprocess.run(
         [sys.executable, "-c", _IMPORTS], capture_output=True, text=True, check=True, cwd=ROOT
     )
     assert done.stdout.strip() == ""
 
 
-def _replace(config, **parts):
+def _replace(config: BenchmarkConfig, **parts: dict[str, Any]) -> BenchmarkConfig:
     """``config`` with fields of its parts replaced: ``run={"workers": 1}``."""
     return dataclasses.replace(
         config,
@@ -319,7 +333,9 @@ def _replace(config, **parts):
     )
 
 
-def test_script_reports_an_unknown_object_and_exits_2(tmp_path, capsys):
+def test_script_reports_an_unknown_object_and_exits_2(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     script = load_script("benchmark")
     assert script.main(["--source", "sim", "--object", "unicorn", "--out-dir", str(tmp_path)]) == 2
     err = capsys.readouterr().err
@@ -327,7 +343,7 @@ def test_script_reports_an_unknown_object_and_exits_2(tmp_path, capsys):
     assert "unknown object 'unicorn'" in err and "cat" in err
 
 
-def test_script_parses_the_sim_options():
+def test_script_parses_the_sim_options() -> None:
     config = load_script("benchmark").parse_args(
         ["--source", "sim", "--experiment", "solids", "--sessions", "2", "--tag", "_x"]
     )
@@ -337,7 +353,7 @@ def test_script_parses_the_sim_options():
     assert config.report.tag == "_x"
 
 
-def test_reports_go_to_runs_unless_told_otherwise():
+def test_reports_go_to_runs_unless_told_otherwise() -> None:
     script = load_script("benchmark")
     assert script.parse_args([]).report.out_dir == ROOT / "runs" / "benchmark"
     config = script.parse_args(["--out-dir", "docs/benchmarks"])
@@ -345,7 +361,7 @@ def test_reports_go_to_runs_unless_told_otherwise():
 
 
 @pytest.mark.slow
-def test_sensing_experiment_measures_points_and_wall_times(tmp_path):
+def test_sensing_experiment_measures_points_and_wall_times(tmp_path: Path) -> None:
     config = load_script("benchmark").parse_args(
         ["--source", "sim", "--experiment", "sensing", "--sessions", "1", "--object", "bird"]
     )
@@ -368,7 +384,7 @@ def _write_user_meshes(directory: Path) -> None:
     ellipsoid(subdivisions=4).apply_scale(1e3).export(directory / "egg.ply")
 
 
-def _mesh_config(tmp_path: Path, argv: list[str]):
+def _mesh_config(tmp_path: Path, argv: list[str]) -> BenchmarkConfig:
     """The benchmark's config of ``argv`` with its caches and records under ``tmp_path``."""
     config = load_script("benchmark").parse_args(argv)
     return _replace(
@@ -378,7 +394,9 @@ def _mesh_config(tmp_path: Path, argv: list[str]):
     )
 
 
-def test_user_meshes_in_millimetres_are_benchmarked(tmp_path, capsys):
+def test_user_meshes_in_millimetres_are_benchmarked(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     _write_user_meshes(tmp_path / "meshes")
     argv = ["--mesh-dir", str(tmp_path / "meshes"), "--units", "mm", "--per-model", "2"]
     argv += ["--n-points", "21", "--spacing-mm", "1.2", "--method", "fast", "--workers", "1"]
@@ -402,7 +420,9 @@ def test_user_meshes_in_millimetres_are_benchmarked(tmp_path, capsys):
     assert "building a database" not in capsys.readouterr().out
 
 
-def test_millimetre_meshes_read_as_metres_are_named(tmp_path, capsys):
+def test_millimetre_meshes_read_as_metres_are_named(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     _write_user_meshes(tmp_path / "meshes")
     config = _mesh_config(tmp_path, ["--mesh-dir", str(tmp_path / "meshes"), "--method", "fast"])
     assert run_cli(lambda: run(config)) == 2
@@ -411,7 +431,7 @@ def test_millimetre_meshes_read_as_metres_are_named(tmp_path, capsys):
     assert "--units mm" in last
 
 
-def test_a_sweep_writes_one_point_per_value_with_its_figure(tmp_path):
+def test_a_sweep_writes_one_point_per_value_with_its_figure(tmp_path: Path) -> None:
     _write_user_meshes(tmp_path / "meshes")
     out = tmp_path / "out"
     argv = ["--mesh-dir", str(tmp_path / "meshes"), "--units", "mm", "--per-model", "2"]
@@ -427,12 +447,14 @@ def test_a_sweep_writes_one_point_per_value_with_its_figure(tmp_path):
     assert "![Fig. 4.12](sweep_length.png)" in (out / "sweep_length.md").read_text()
 
 
-def test_curves_without_local_geometry_are_a_failed_record(database_dir, jobs, monkeypatch):
+def test_curves_without_local_geometry_are_a_failed_record(
+    database_dir: Path, jobs: list[bench.Job], monkeypatch: pytest.MonkeyPatch
+) -> None:
     from recognition.errors import DegenerateGeometry
 
     database = ModelDatabase.load(database_dir)
 
-    def degenerate(*args, **kwargs):
+    def degenerate(*args: Any, **kwargs: Any) -> None:
         raise DegenerateGeometry("two data curves have the same tangent direction at p")
 
     monkeypatch.setattr(database, "recognize", degenerate)
@@ -444,7 +466,9 @@ def test_curves_without_local_geometry_are_a_failed_record(database_dir, jobs, m
     assert summary.instances == 1 and summary.success_rate == 0.0
 
 
-def test_sampling_planes_that_coincide_are_refused_before_any_instance(tmp_path, capsys):
+def test_sampling_planes_that_coincide_are_refused_before_any_instance(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     script = load_script("benchmark")
     argv = ["--plane-angle", "90", "--method", "fast", "--out-dir", str(tmp_path)]
     assert script.main(argv) == 2

@@ -1,6 +1,7 @@
 """scripts/probe.py end to end: probe, recognise, report, save; bad input exits 2."""
 
 import dataclasses
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -11,7 +12,7 @@ from recognition import DataCurves
 from tactile_sim.evaluation import pose_error
 
 
-def test_pose_error_is_the_rotation_angle_and_the_mean_displacement_of_the_data():
+def test_pose_error_is_the_rotation_angle_and_the_mean_displacement_of_the_data() -> None:
     rng = np.random.default_rng(0)
     points = rng.normal(scale=0.01, size=(30, 3))
     T = np.eye(4)
@@ -29,7 +30,9 @@ def test_pose_error_is_the_rotation_angle_and_the_mean_displacement_of_the_data(
 
 
 @pytest.mark.slow
-def test_probing_an_object_recognises_it_and_saves_its_curves(tmp_path, capsys):
+def test_probing_an_object_recognises_it_and_saves_its_curves(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     probe = load_script("probe")
     config = probe.parse_args(["--object", "bird", "--seed", "1", "--rerun", "off"])
     summary = probe.run(dataclasses.replace(config, out=tmp_path))
@@ -43,7 +46,9 @@ def test_probing_an_object_recognises_it_and_saves_its_curves(tmp_path, capsys):
     assert "recognised as bird (correct)" in out and "timings:" in out
 
 
-def test_an_unknown_object_lists_the_known_ones_and_exits_2(tmp_path, capsys):
+def test_an_unknown_object_lists_the_known_ones_and_exits_2(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     probe = load_script("probe")
     assert probe.main(["--object", "unicorn", "--rerun", "off", "--out", str(tmp_path)]) == 2
     err = capsys.readouterr().err
