@@ -98,6 +98,13 @@ def _records(
     return [r for r in records if (r.instance, r.method, r.settings) in wanted]
 
 
+def _directory(database: ModelDatabase) -> Path:
+    """Where the workers load ``database`` from."""
+    if database.directory is None:
+        raise ValueError("the benchmark's workers load the database from disk: save it first")
+    return database.directory
+
+
 def _results_path(
     config: BenchmarkConfig, name: str, source: Any, registration: RegistrationConfig, tag: str
 ) -> Path:
@@ -161,7 +168,7 @@ def run_synthetic(
     jobs = plan_jobs(
         instance_specs(database, source), source, methods.configs(), methods.thesis_instances
     )
-    records = _records(config, database.directory, jobs, path)
+    records = _records(config, _directory(database), jobs, path)
     summary = summarize(records)
     payload = summary_json(summary)
     if config.report.json_path:
@@ -205,7 +212,7 @@ def run_sweep(
             {"fast": registration},
             methods.thesis_instances,
         )
-        records = _records(config, database.directory, jobs, path)
+        records = _records(config, _directory(database), jobs, path)
         results[value] = summarize(records)["fast"]
     stem = f"sweep_{config.sweep}"
     payload = {
@@ -285,7 +292,7 @@ def run_sim(config: BenchmarkConfig, *, echo: Echo = print) -> dict[str, Any]:
             from tactile_sim.objects.database import catalog_database
 
             database = catalog_database()
-            handle, names = database.directory, database.names
+            handle, names = _directory(database), database.names
             registration = config.methods.config()
             configs = config.methods.configs()
         else:

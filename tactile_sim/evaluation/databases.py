@@ -5,6 +5,7 @@ from __future__ import annotations
 import hashlib
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 from recognition import ModelDatabase, RecognitionError
 from tactile_sim.evaluation.benchmark_config import MeshSettings
@@ -50,7 +51,7 @@ def benchmark_database(
         return ModelDatabase.load(directory), mesh_dir.name
     except RecognitionError:
         pass
-    models = {}
+    models: dict[str, Any] = {}
     for p in files:
         mesh = trimesh.load(p, force="mesh")
         mesh.apply_scale(scale)

@@ -160,12 +160,13 @@ _SPLINE_SAMPLES_PER_SEGMENT = 40_000
 
 def _dense_outline(
     object_name: str, parameters: Mapping[str, Any]
-) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+) -> tuple[np.ndarray, np.ndarray]:
     """The true outline, object frame, densely enough that the nearest vertex gives the
     distance to within a micrometre: (m, 2) metres, and each vertex's outline parameter
     (see :attr:`OutlineTrace.outline_parameter`), (m,)."""
     if object_name == "planar_ellipse":
-        outline = ellipse_outline(*parameters["semi_axes_m"], n_segments=_ELLIPSE_SAMPLES)
+        a, b = parameters["semi_axes_m"]
+        outline = ellipse_outline(a, b, n_segments=_ELLIPSE_SAMPLES)
         return outline, np.arange(len(outline)) * (2 * math.pi / _ELLIPSE_SAMPLES)
     outline = closed_spline_outline(
         parameters["knots_m"], samples_per_segment=_SPLINE_SAMPLES_PER_SEGMENT

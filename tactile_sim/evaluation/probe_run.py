@@ -14,7 +14,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
 
 from recognition.rigid import rotation_angle
 from tactile_sim.evaluation.benchmark_config import RUNS_DIR
@@ -68,7 +67,7 @@ class ProbeRunConfig:
 
 
 def pose_error(
-    T_estimated: NDArray[np.float64], T_true: NDArray[np.float64], points: NDArray[np.float64]
+    T_estimated: np.ndarray, T_true: np.ndarray, points: np.ndarray
 ) -> tuple[float, float]:
     """Returns the rotation error (degrees) between two 4x4 poses and the mean distance
     (metres) between where they put ``points`` (n, 3): the data on the model."""
