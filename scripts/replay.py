@@ -11,9 +11,7 @@ import sys
 from dataclasses import dataclass
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-
-from tactile_sim.errors import SimulationError
+from tactile_sim.cli import run_cli
 
 
 @dataclass(frozen=True)
@@ -53,8 +51,9 @@ def run(config: Config) -> None:
         viewer.wait()
 
 
-def parse_args(argv=None) -> Config:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def parse_args(argv: list[str] | None = None) -> Config:
+    """The recording and viewer from the command line (``argv``: default ``sys.argv``)."""
+    p = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
     p.add_argument("file", type=Path, help="the .rrd recording")
     p.add_argument("--web", action="store_true", help="serve to a browser on 127.0.0.1")
     p.add_argument(
@@ -65,14 +64,10 @@ def parse_args(argv=None) -> Config:
     return Config(a.file, a.web, a.web_port, a.grpc_port)
 
 
-def main(argv=None) -> int:
+def main(argv: list[str] | None = None) -> int:
+    """Parse the arguments and show the recording; 2 on a bad recording."""
     config = parse_args(argv)
-    try:
-        run(config)
-    except SimulationError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
-    return 0
+    return run_cli(lambda: run(config))
 
 
 if __name__ == "__main__":

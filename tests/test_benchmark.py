@@ -1,5 +1,6 @@
 """The benchmark runner: resuming after a kill, the process pool and Ray give the same
-records as a serial run, simulated instances, and the script's bad-input exits."""
+records as a serial run, typed records read back as written, simulated instances, and
+the benchmark runs' outputs and bad-input exits."""
 
 import dataclasses
 import json
@@ -8,22 +9,26 @@ import signal
 import subprocess
 import sys
 import time
+from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 import pytest
 from testing_meshes import blob, ellipsoid
 from testing_scripts import load_script
 
-from recognition import benchmark as bench
+from recognition import evaluation as bench
 from recognition.surfaces.database import ModelDatabase
 from recognition.surfaces.registration import ClosedFormConfig, FastConfig
+from tactile_sim.cli import run_cli
+from tactile_sim.evaluation import SWEEPS, BenchmarkConfig, run
 
 ROOT = Path(__file__).resolve().parents[1]
 SOURCE = bench.SyntheticSource(per_model=4, n_points=21, spacing_m=1.2e-3, separation_m=5e-3)
 
 
 @pytest.fixture(scope="module")
-def database_dir(tmp_path_factory) -> Path:
+def database_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
     database = ModelDatabase.from_meshes(
         {"blob": blob(subdivisions=4), "ellipsoid": ellipsoid(subdivisions=4)}, progress=False
     )
@@ -31,30 +36,34 @@ def database_dir(tmp_path_factory) -> Path:
 
 
 @pytest.fixture(scope="module")
-def jobs(database_dir):
+def jobs(database_dir: Path) -> list[bench.Job]:
     specs = SOURCE.specs(ModelDatabase.load(database_dir))
     assert len(specs) == 8
     return [bench.Job(spec, SOURCE, (FastConfig(),)) for spec in specs]
 
 
 @pytest.fixture(scope="module")
-def uninterrupted(database_dir, jobs, tmp_path_factory):
+def uninterrupted(
+    database_dir: Path, jobs: list[bench.Job], tmp_path_factory: pytest.TempPathFactory
+) -> list[bench.Record]:
     path = tmp_path_factory.mktemp("uninterrupted") / "records.jsonl"
     return bench.run(database_dir, jobs, path, progress=False)
 
 
-def _comparable(records):
+def _comparable(records: list[bench.Record]) -> list[dict[str, Any]]:
     return sorted(
         (bench.comparable(r) for r in records), key=lambda r: (r["instance"], r["method"])
     )
 
 
-def test_a_run_writes_one_record_per_instance_and_method(uninterrupted, jobs):
+def test_a_run_writes_one_record_per_instance_and_method(
+    uninterrupted: list[bench.Record], jobs: list[bench.Job]
+) -> None:
     assert len(uninterrupted) == len(jobs)
-    assert {r["instance"] for r in uninterrupted} == {j.spec.key for j in jobs}
-    settings = {r["settings"] for r in uninterrupted}
+    assert {r.instance for r in uninterrupted} == {j.spec.key for j in jobs}
+    settings = {r.settings for r in uninterrupted}
     assert settings == {bench.settings_key(SOURCE, FastConfig())}
-    summary = bench.summarize(uninterrupted)["fast"]
+    summary = bench.summarize(uninterrupted)["fast"].to_json()
     assert set(summary) >= {
         "success_rate",
         "median_time_s",
@@ -67,12 +76,12 @@ def test_a_run_writes_one_record_per_instance_and_method(uninterrupted, jobs):
 
 
 def test_interrupted_run_resumes_without_redoing_finished_instances(
-    database_dir, jobs, uninterrupted, tmp_path
-):
+    database_dir: Path, jobs: list[bench.Job], uninterrupted: list[bench.Record], tmp_path: Path
+) -> None:
     path = tmp_path / "records.jsonl"
     first: list[dict] = []
 
-    def stop_after_three(record):
+    def stop_after_three(record: bench.Record) -> None:
         first.append(record)
         if len(first) == 3:
             raise KeyboardInterrupt
@@ -83,15 +92,15 @@ def test_interrupted_run_resumes_without_redoing_finished_instances(
     again: list[dict] = []
     records = bench.run(database_dir, jobs, path, progress=False, on_record=again.append)
     assert len(again) == len(jobs) - 3
-    assert not {r["instance"] for r in again} & {r["instance"] for r in first}
+    assert not {r.instance for r in again} & {r.instance for r in first}
     assert _comparable(records) == _comparable(uninterrupted)
 
 
 def test_truncated_last_line_is_ignored_and_its_instance_redone(
-    database_dir, jobs, uninterrupted, tmp_path
-):
+    database_dir: Path, jobs: list[bench.Job], uninterrupted: list[bench.Record], tmp_path: Path
+) -> None:
     path = tmp_path / "records.jsonl"
-    lines = [json.dumps(r) for r in uninterrupted[:2]]
+    lines = [r.dumps() for r in uninterrupted[:2]]
     path.write_text("\n".join(lines) + "\n" + lines[0][: len(lines[0]) // 2])
     again: list[dict] = []
     records = bench.run(database_dir, jobs, path, progress=False, on_record=again.append)
@@ -99,9 +108,11 @@ def test_truncated_last_line_is_ignored_and_its_instance_redone(
     assert _comparable(records) == _comparable(uninterrupted)
 
 
-def test_other_settings_are_not_taken_for_done(database_dir, jobs, uninterrupted, tmp_path):
+def test_other_settings_are_not_taken_for_done(
+    database_dir: Path, jobs: list[bench.Job], uninterrupted: list[bench.Record], tmp_path: Path
+) -> None:
     path = tmp_path / "records.jsonl"
-    path.write_text("".join(json.dumps(r) + "\n" for r in uninterrupted))
+    path.write_text("".join(r.dumps() + "\n" for r in uninterrupted))
     other = [bench.Job(j.spec, j.source, (FastConfig(delta=20.0),)) for j in jobs[:2]]
     again: list[dict] = []
     bench.run(database_dir, other, path, progress=False, on_record=again.append)
@@ -111,7 +122,7 @@ def test_other_settings_are_not_taken_for_done(database_dir, jobs, uninterrupted
 _KILLED_RUN = """
 import sys
 from pathlib import Path
-from recognition import benchmark as bench
+from recognition import evaluation as bench
 from recognition.surfaces.database import ModelDatabase
 from recognition.surfaces.registration import FastConfig
 source = bench.SyntheticSource(per_model=4, n_points=21, spacing_m=1.2e-3, separation_m=5e-3)
@@ -125,8 +136,8 @@ bench.run(database, jobs, Path(sys.argv[2]), progress=False, on_record=slow)
 
 @pytest.mark.slow
 def test_benchmark_killed_halfway_finishes_without_redoing(
-    database_dir, jobs, uninterrupted, tmp_path
-):
+    database_dir: Path, jobs: list[bench.Job], uninterrupted: list[bench.Record], tmp_path: Path
+) -> None:
     path = tmp_path / "records.jsonl"
     process = subprocess.Popen(
         [sys.executable, "-c", _KILLED_RUN, str(database_dir), str(path)], cwd=ROOT
@@ -141,22 +152,24 @@ def test_benchmark_killed_halfway_finishes_without_redoing(
     finally:
         process.kill()
         process.wait()
-    done = {r["instance"] for r in bench.read_results(path)}
+    done = {r.instance for r in bench.read_results(path)}
     assert 3 <= len(done) < len(jobs)
     again: list[dict] = []
     records = bench.run(database_dir, jobs, path, progress=False, on_record=again.append)
-    assert {r["instance"] for r in again} == {j.spec.key for j in jobs} - done
+    assert {r.instance for r in again} == {j.spec.key for j in jobs} - done
     assert _comparable(records) == _comparable(uninterrupted)
 
 
 @pytest.mark.slow
-def test_process_pool_gives_the_same_records(database_dir, jobs, uninterrupted, tmp_path):
+def test_process_pool_gives_the_same_records(
+    database_dir: Path, jobs: list[bench.Job], uninterrupted: list[bench.Record], tmp_path: Path
+) -> None:
     records = bench.run(database_dir, jobs, tmp_path / "records.jsonl", workers=2, progress=False)
     assert _comparable(records) == _comparable(uninterrupted)
 
 
 @pytest.fixture(scope="module")
-def ray_cluster():
+def ray_cluster() -> Iterator[str]:
     """A local Ray cluster of 2 CPUs on 127.0.0.1, its GCS address."""
     # Ray binds to the loopback address only when told that it cannot form a cluster
     # (read when ray is imported).
@@ -180,8 +193,12 @@ def ray_cluster():
 
 @pytest.mark.slow
 def test_ray_backend_gives_the_same_records_as_local(
-    ray_cluster, database_dir, jobs, uninterrupted, tmp_path
-):
+    ray_cluster: str,
+    database_dir: Path,
+    jobs: list[bench.Job],
+    uninterrupted: list[bench.Record],
+    tmp_path: Path,
+) -> None:
     records = bench.run(
         database_dir, jobs, tmp_path / "ray.jsonl", workers=2, backend="ray", progress=False
     )
@@ -191,7 +208,7 @@ def test_ray_backend_gives_the_same_records_as_local(
 _RAY_DRIVER = """
 import sys
 from pathlib import Path
-from recognition import benchmark as bench
+from recognition import evaluation as bench
 from recognition.surfaces.database import ModelDatabase
 from recognition.surfaces.registration import FastConfig
 source = bench.SyntheticSource(per_model=4, n_points=21, spacing_m=1.2e-3, separation_m=5e-3)
@@ -205,8 +222,8 @@ bench.run(database, jobs, Path(sys.argv[2]), workers=2, backend="ray",
 
 @pytest.mark.slow
 def test_ray_address_connects_to_an_existing_cluster(
-    ray_cluster, database_dir, uninterrupted, tmp_path
-):
+    ray_cluster: str, database_dir: Path, uninterrupted: list[bench.Record], tmp_path: Path
+) -> None:
     path = tmp_path / "driver.jsonl"
     subprocess.run(
         [sys.executable, "-c", _RAY_DRIVER, str(database_dir), str(path), ray_cluster],
@@ -218,8 +235,8 @@ def test_ray_address_connects_to_an_existing_cluster(
 
 
 @pytest.mark.slow
-def test_simulated_instances_are_reproducible_and_recorded(tmp_path):
-    from tactile_sim.experiments import solids_experiment
+def test_simulated_instances_are_reproducible_and_recorded(tmp_path: Path) -> None:
+    from tactile_sim.evaluation import solids_experiment
 
     source = solids_experiment(objects=("sphere",), sessions_per_object=2, n_points=11)
     specs = source.specs(None)
@@ -231,17 +248,94 @@ def test_simulated_instances_are_reproducible_and_recorded(tmp_path):
     records = bench.run(models, jobs, tmp_path / "sim.jsonl", progress=False)
     assert len(records) == 2
     for r in records:
-        assert r["points_per_curve"] == [11, 11, 11]
-        assert set(r["errors_mm"]) == set(models.names)
-        assert r["reference"]["errors_mm"].keys() == r["errors_mm"].keys()
-        assert 0 <= r["sensed_error_mean_mm"] < 0.1
+        assert r.info["points_per_curve"] == [11, 11, 11]
+        assert set(r.errors_mm) == set(models.names)
+        assert r.reference is not None
+        assert r.reference.errors_mm.keys() == r.errors_mm.keys()
+        assert 0 <= r.info["sensed_error_mean_mm"] < 0.1
     again = bench.run_job(models.load(), jobs[0])[0]
     assert bench.comparable(again) == {
         k: v for k, v in bench.comparable(records[0]).items() if k != "settings"
     }
 
 
-def test_script_reports_an_unknown_object_and_exits_2(tmp_path, capsys):
+def test_records_read_back_as_written(uninterrupted: list[bench.Record], tmp_path: Path) -> None:
+    path = tmp_path / "records.jsonl"
+    path.write_text("".join(r.dumps() + "\n" for r in uninterrupted))
+    again = bench.read_results(path)
+    assert again == uninterrupted
+    assert [r.dumps() for r in again] == path.read_text().splitlines()
+    first = json.loads(path.read_text().splitlines()[0])
+    assert list(first)[:5] == ["instance", "model", "index", "vertex", "seed"]
+    assert list(first)[-2:] == ["localization_error_mm", "settings"]
+
+
+def test_instance_facts_and_errors_are_kept_apart() -> None:
+    failed = bench.Record(
+        "cat/0",
+        "cat",
+        0,
+        None,
+        7,
+        {"error": "SweepTruncated: too few"},
+        0.5,
+        "fast",
+        None,
+        False,
+        0.0,
+    )
+    payload = failed.to_json()
+    assert list(payload) == [
+        "instance",
+        "model",
+        "index",
+        "vertex",
+        "seed",
+        "error",
+        "instance_time_s",
+        "method",
+        "recognized",
+        "success",
+        "time_s",
+        "errors_mm",
+        "times_s",
+        "localization_error_mm",
+    ]
+    again = bench.Record.from_json(payload)
+    assert again == failed and again.error is None
+    assert again.instance_error == "SweepTruncated: too few"
+    unrecognised = dataclasses.replace(failed, info={"probe_time_s": 1.0}, error="Degenerate")
+    again = bench.Record.from_json(unrecognised.to_json())
+    assert again.info == {"probe_time_s": 1.0} and again.error == "Degenerate"
+
+
+_IMPORTS = """
+import sys
+import recognition, recognition.evaluation, recognition.evaluation.reports
+import recognition.evaluation.figures, recognition.evaluation.ray_backend
+print(" ".join(sorted(m for m in ("ray", "matplotlib", "mujoco", "tactile_sim", "tqdm")
+                      if m in sys.modules)))
+"""
+
+
+def test_importing_the_evaluation_layer_pulls_in_neither_ray_nor_matplotlib_nor_mujoco() -> None:
+    done = subprocess.run(
+        [sys.executable, "-c", _IMPORTS], capture_output=True, text=True, check=True, cwd=ROOT
+    )
+    assert done.stdout.strip() == ""
+
+
+def _replace(config: BenchmarkConfig, **parts: dict[str, Any]) -> BenchmarkConfig:
+    """``config`` with fields of its parts replaced: ``run={"workers": 1}``."""
+    return dataclasses.replace(
+        config,
+        **{k: dataclasses.replace(getattr(config, k), **v) for k, v in parts.items()},
+    )
+
+
+def test_script_reports_an_unknown_object_and_exits_2(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     script = load_script("benchmark")
     assert script.main(["--source", "sim", "--object", "unicorn", "--out-dir", str(tmp_path)]) == 2
     err = capsys.readouterr().err
@@ -249,24 +343,30 @@ def test_script_reports_an_unknown_object_and_exits_2(tmp_path, capsys):
     assert "unknown object 'unicorn'" in err and "cat" in err
 
 
-def test_script_parses_the_sim_options():
+def test_script_parses_the_sim_options() -> None:
     config = load_script("benchmark").parse_args(
         ["--source", "sim", "--experiment", "solids", "--sessions", "2", "--tag", "_x"]
     )
     assert config.source == "sim"
-    assert config.experiments == ("solids",)
-    assert config.sessions == 2
-    assert config.tag == "_x"
+    assert config.sim.experiments == ("solids",)
+    assert config.sim.sessions == 2
+    assert config.report.tag == "_x"
+
+
+def test_reports_go_to_runs_unless_told_otherwise() -> None:
+    script = load_script("benchmark")
+    assert script.parse_args([]).report.out_dir == ROOT / "runs" / "benchmark"
+    config = script.parse_args(["--out-dir", "docs/benchmarks"])
+    assert config.report.out_dir == Path("docs/benchmarks")
 
 
 @pytest.mark.slow
-def test_sensing_experiment_measures_points_and_wall_times(tmp_path):
-    script = load_script("benchmark")
-    config = script.parse_args(
+def test_sensing_experiment_measures_points_and_wall_times(tmp_path: Path) -> None:
+    config = load_script("benchmark").parse_args(
         ["--source", "sim", "--experiment", "sensing", "--sessions", "1", "--object", "bird"]
     )
-    config = dataclasses.replace(config, out_dir=tmp_path, json_path=tmp_path / "sensing.json")
-    figures = script.run(config)["sensing"]
+    config = _replace(config, report={"out_dir": tmp_path, "json_path": tmp_path / "sensing.json"})
+    figures = run(config)["sensing"]
     assert figures["n_points"] == 63
     assert figures["objects"]["bird"]["n_points"] == 63
     # Sensed points lie on the surface to within the sensor's error (tenths of a mm).
@@ -284,14 +384,25 @@ def _write_user_meshes(directory: Path) -> None:
     ellipsoid(subdivisions=4).apply_scale(1e3).export(directory / "egg.ply")
 
 
-def test_user_meshes_in_millimetres_are_benchmarked(tmp_path, monkeypatch, capsys):
-    script = load_script("benchmark")
-    monkeypatch.setattr(script, "ROOT", tmp_path)  # database cache and records go here
+def _mesh_config(tmp_path: Path, argv: list[str]) -> BenchmarkConfig:
+    """The benchmark's config of ``argv`` with its caches and records under ``tmp_path``."""
+    config = load_script("benchmark").parse_args(argv)
+    return _replace(
+        config,
+        meshes={"cache_dir": tmp_path / "runs" / "mesh_databases"},
+        run={"records_dir": tmp_path / "runs" / "benchmark"},
+    )
+
+
+def test_user_meshes_in_millimetres_are_benchmarked(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     _write_user_meshes(tmp_path / "meshes")
     argv = ["--mesh-dir", str(tmp_path / "meshes"), "--units", "mm", "--per-model", "2"]
     argv += ["--n-points", "21", "--spacing-mm", "1.2", "--method", "fast", "--workers", "1"]
     argv += ["--out-dir", str(tmp_path / "out"), "--json", str(tmp_path / "summary.json")]
-    assert script.main(argv) == 0
+    config = _mesh_config(tmp_path, argv)
+    assert run_cli(lambda: run(config)) == 0
     summary = json.loads((tmp_path / "summary.json").read_text())["fast"]
     assert summary["instances"] == 4
     assert summary["success_rate"] == 1.0
@@ -305,30 +416,30 @@ def test_user_meshes_in_millimetres_are_benchmarked(tmp_path, monkeypatch, capsy
     # the database is cached: a second run loads it instead of building it again
     assert "building a database of 2 meshes" in capsys.readouterr().out
     assert len(list((tmp_path / "runs" / "mesh_databases").iterdir())) == 1
-    assert script.main(argv) == 0
+    assert run_cli(lambda: run(config)) == 0
     assert "building a database" not in capsys.readouterr().out
 
 
-def test_millimetre_meshes_read_as_metres_are_named(tmp_path, monkeypatch, capsys):
-    script = load_script("benchmark")
-    monkeypatch.setattr(script, "ROOT", tmp_path)
+def test_millimetre_meshes_read_as_metres_are_named(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     _write_user_meshes(tmp_path / "meshes")
-    assert script.main(["--mesh-dir", str(tmp_path / "meshes"), "--method", "fast"]) == 2
+    config = _mesh_config(tmp_path, ["--mesh-dir", str(tmp_path / "meshes"), "--method", "fast"])
+    assert run_cli(lambda: run(config)) == 2
     last = capsys.readouterr().err.splitlines()[-1]  # after the progress bar
     assert last.startswith("error: blob") and "millimetres read as metres" in last
     assert "--units mm" in last
 
 
-def test_a_sweep_writes_one_point_per_value_with_its_figure(tmp_path, monkeypatch):
-    script = load_script("benchmark")
-    monkeypatch.setattr(script, "ROOT", tmp_path)
+def test_a_sweep_writes_one_point_per_value_with_its_figure(tmp_path: Path) -> None:
     _write_user_meshes(tmp_path / "meshes")
     out = tmp_path / "out"
     argv = ["--mesh-dir", str(tmp_path / "meshes"), "--units", "mm", "--per-model", "2"]
-    assert script.main([*argv, "--sweep", "length", "--workers", "1", "--out-dir", str(out)]) == 0
+    argv += ["--sweep", "length", "--workers", "1", "--out-dir", str(out)]
+    assert run_cli(lambda: run(_mesh_config(tmp_path, argv))) == 0
     payload = json.loads((out / "sweep_length.json").read_text())
     assert payload["figure"] == "Fig. 4.12"
-    assert [p["value"] for p in payload["points"]] == script.SWEEPS["length"][1]
+    assert [p["value"] for p in payload["points"]] == list(SWEEPS["length"].values)
     assert all(p["instances"] == 4 for p in payload["points"])
     # 30 mm curves tell the blob from the egg
     assert payload["points"][-1]["success_rate"] == 1.0
@@ -336,23 +447,28 @@ def test_a_sweep_writes_one_point_per_value_with_its_figure(tmp_path, monkeypatc
     assert "![Fig. 4.12](sweep_length.png)" in (out / "sweep_length.md").read_text()
 
 
-def test_curves_without_local_geometry_are_a_failed_record(database_dir, jobs, monkeypatch):
+def test_curves_without_local_geometry_are_a_failed_record(
+    database_dir: Path, jobs: list[bench.Job], monkeypatch: pytest.MonkeyPatch
+) -> None:
     from recognition.errors import DegenerateGeometry
 
     database = ModelDatabase.load(database_dir)
 
-    def degenerate(*args, **kwargs):
+    def degenerate(*args: Any, **kwargs: Any) -> None:
         raise DegenerateGeometry("two data curves have the same tangent direction at p")
 
     monkeypatch.setattr(database, "recognize", degenerate)
     (record,) = bench.run_job(database, jobs[0])
-    assert record["success"] is False and record["recognized"] is None
-    assert record["error"].startswith("DegenerateGeometry: two data curves")
+    assert record.success is False and record.recognized is None
+    assert record.error is not None
+    assert record.error.startswith("DegenerateGeometry: two data curves")
     summary = bench.summarize([record])["fast"]
-    assert summary["instances"] == 1 and summary["success_rate"] == 0.0
+    assert summary.instances == 1 and summary.success_rate == 0.0
 
 
-def test_sampling_planes_that_coincide_are_refused_before_any_instance(tmp_path, capsys):
+def test_sampling_planes_that_coincide_are_refused_before_any_instance(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     script = load_script("benchmark")
     argv = ["--plane-angle", "90", "--method", "fast", "--out-dir", str(tmp_path)]
     assert script.main(argv) == 2

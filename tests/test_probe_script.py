@@ -1,5 +1,6 @@
 """scripts/probe.py end to end: probe, recognise, report, save; bad input exits 2."""
 
+import dataclasses
 from pathlib import Path
 
 import numpy as np
@@ -8,33 +9,33 @@ from scipy.spatial.transform import Rotation
 from testing_scripts import load_script
 
 from recognition import DataCurves
+from tactile_sim.evaluation import pose_error
 
-ROOT = Path(__file__).resolve().parents[1]
 
-
-def test_pose_error_is_the_rotation_angle_and_the_mean_displacement_of_the_data():
-    probe = load_script("probe")
+def test_pose_error_is_the_rotation_angle_and_the_mean_displacement_of_the_data() -> None:
     rng = np.random.default_rng(0)
     points = rng.normal(scale=0.01, size=(30, 3))
     T = np.eye(4)
     T[:3, :3] = Rotation.from_rotvec(rng.normal(size=3)).as_matrix()
     T[:3, 3] = (0.4, 0.1, 0.0)
-    assert probe.pose_error(T, T, points) == pytest.approx((0.0, 0.0), abs=1e-6)
+    assert pose_error(T, T, points) == pytest.approx((0.0, 0.0), abs=1e-6)
     shifted = T.copy()
     shifted[:3, 3] += (0.0, 0.0, 0.002)
-    assert probe.pose_error(shifted, T, points) == pytest.approx((0.0, 0.002), abs=1e-6)
+    assert pose_error(shifted, T, points) == pytest.approx((0.0, 0.002), abs=1e-6)
     turned = T.copy()
     turned[:3, :3] = Rotation.from_euler("z", 10, degrees=True).as_matrix() @ T[:3, :3]
-    angle, shift = probe.pose_error(turned, T, points)
+    angle, shift = pose_error(turned, T, points)
     assert angle == pytest.approx(10.0)
     assert 0 < shift < 0.01
 
 
 @pytest.mark.slow
-def test_probing_an_object_recognises_it_and_saves_its_curves(tmp_path, capsys):
+def test_probing_an_object_recognises_it_and_saves_its_curves(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     probe = load_script("probe")
     config = probe.parse_args(["--object", "bird", "--seed", "1", "--rerun", "off"])
-    summary = probe.run(probe.Config(**{**vars(config), "out": tmp_path}))
+    summary = probe.run(dataclasses.replace(config, out=tmp_path))
     assert summary["recognized"] == "bird" and summary["correct"]
     assert summary["location_error_mm"] < 2.0
     ranking = [e for _, e in summary["ranking_mm"] if e is not None]
@@ -45,7 +46,9 @@ def test_probing_an_object_recognises_it_and_saves_its_curves(tmp_path, capsys):
     assert "recognised as bird (correct)" in out and "timings:" in out
 
 
-def test_an_unknown_object_lists_the_known_ones_and_exits_2(tmp_path, capsys):
+def test_an_unknown_object_lists_the_known_ones_and_exits_2(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     probe = load_script("probe")
     assert probe.main(["--object", "unicorn", "--rerun", "off", "--out", str(tmp_path)]) == 2
     err = capsys.readouterr().err

@@ -24,7 +24,7 @@ def _ellipse_arc_m(t0: float, length_m: float, spacing_m: float, theta: float) -
     return p @ R.T + np.array([0.4, 0.1])
 
 
-def test_table_3_4_from_exact_points_recovers_the_ellipse():
+def test_table_3_4_from_exact_points_recovers_the_ellipse() -> None:
     trials = [
         [_ellipse_arc_m(0.3, 0.06, 0.5e-3, 0.2), _ellipse_arc_m(3.5, 0.06, 0.5e-3, -1.0)],
         [_ellipse_arc_m(1.3, 0.06, 0.5e-3, 2.0), _ellipse_arc_m(4.4, 0.06, 0.5e-3, 0.7)],
@@ -36,7 +36,7 @@ def test_table_3_4_from_exact_points_recovers_the_ellipse():
     assert set(result.to_json()) >= {"table", "thesis", "measured"}
 
 
-def _spline_segments():
+def _spline_segments() -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
     from tactile_sim.collision import closed_spline_outline, load_solid
 
     solid = load_solid("planar_spline")
@@ -54,13 +54,13 @@ def _spline_segments():
     return segments
 
 
-def test_table_3_5_from_exact_points_recovers_the_spline_segments():
+def test_table_3_5_from_exact_points_recovers_the_spline_segments() -> None:
     result = chapter3.table_3_5_from_points(_spline_segments())
     for entry in result.measured.values():
         assert entry["all eight"]["relative_error_percent"] < 1.0
 
 
-def test_sim_source_is_refused_for_tables_without_one(capsys):
+def test_sim_source_is_refused_for_tables_without_one(capsys: pytest.CaptureFixture[str]) -> None:
     with pytest.raises(SystemExit) as exit_info:
         load_script("reproduce_thesis").parse_args(["--table", "3.3", "--source", "sim"])
     assert exit_info.value.code == 2
@@ -68,8 +68,8 @@ def test_sim_source_is_refused_for_tables_without_one(capsys):
 
 
 @pytest.mark.slow
-def test_traced_outline_points_lie_on_the_ellipse():
-    from tactile_sim.experiments import TraceConfig, trace_outlines
+def test_traced_outline_points_lie_on_the_ellipse() -> None:
+    from tactile_sim.evaluation import TraceConfig, trace_outlines
 
     traces = trace_outlines(TraceConfig(trials=1, arc_length_m=0.01, spacing_m=1e-3))
     accuracy = traces.accuracy()
@@ -86,11 +86,15 @@ def test_traced_outline_points_lie_on_the_ellipse():
 
 
 @pytest.mark.slow
-def test_table_3_4_from_the_simulated_robot(tmp_path):
-    script = load_script("reproduce_thesis")
+def test_table_3_4_from_the_simulated_robot(tmp_path: Path) -> None:
+    from recognition.reproduction.reproduce import ReproductionConfig
+    from tactile_sim.evaluation import ThesisTablesConfig, reproduce_thesis
+
     path = tmp_path / "table_3_4_sim.json"
-    config = script.Config(tables=("3.4",), json_path=path, source="sim", sim_trials=2)
-    (result,) = script.run(config)
+    config = ThesisTablesConfig(
+        ReproductionConfig(tables=("3.4",), json_path=path), source="sim", sim_trials=2
+    )
+    (result,) = reproduce_thesis(config)
     payload = json.loads(path.read_text())
     assert set(payload) >= {"table", "thesis", "measured"}
     assert payload["measured"]["source"] == "sim"

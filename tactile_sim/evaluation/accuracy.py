@@ -1,22 +1,28 @@
-"""Accuracy and speed measurements of the simulated probe (for benchmarks and reports).
+"""Accuracy and speed of the simulated probe: sensed points against the meshes, wall times.
 
 :func:`sensing_accuracy` probes objects and measures every sensed point against the
 object's original mesh (libigl AABB: exact point-triangle distances; not
 ``trimesh.proximity``, which is wrong at this scale). :func:`session_timing` measures
-the wall time of warm probing sessions.
+the wall time of warm probing sessions, :func:`probe_script_seconds` that of
+``scripts/probe.py`` as a user runs it; :func:`collision_report` the collision parts.
 """
 
 from __future__ import annotations
 
+import subprocess
+import sys
+import tempfile
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from tactile_sim.collision import convex_decomposition, load_solid, object_parts, solid_names
+from tactile_sim.errors import SimulationError
 from tactile_sim.objects import load_object, object_names
 from tactile_sim.probing import ProbingConfig, build_probe_scene, probe_object
 from tactile_sim.sensor import SensorConfig
@@ -26,9 +32,14 @@ __all__ = [
     "ObjectAccuracy",
     "TimingResult",
     "collision_report",
+    "probe_script_seconds",
     "sensing_accuracy",
     "session_timing",
 ]
+
+
+#: The script a user runs to probe one object (timed by :func:`probe_script_seconds`).
+PROBE_SCRIPT = Path(__file__).resolve().parents[2] / "scripts" / "probe.py"
 
 
 @dataclass(frozen=True)
@@ -245,6 +256,32 @@ def session_timing(
         sim_seconds=tuple(sims),
         n_points=tuple(points),
     )
+
+
+def probe_script_seconds(name: str = "cat", *, runs: int = 4, seed: int = 0) -> list[float]:
+    """Returns the wall times of ``runs`` runs of ``scripts/probe.py --object name``, each a
+    fresh process as a user starts it (seeds ``seed``, ``seed + 1``, ...; the first run
+    warms the caches), seconds.
+
+    Raises
+    ------
+    SimulationError
+        A run failed (its last error output is in the message).
+    """
+    command = [sys.executable, str(PROBE_SCRIPT), "--object", name]
+    walls = []
+    with tempfile.TemporaryDirectory() as out:
+        for k in range(runs):
+            start = time.perf_counter()
+            done = subprocess.run(
+                [*command, "--seed", str(seed + k), "--out", out],
+                capture_output=True,
+                text=True,
+            )
+            if done.returncode != 0:
+                raise SimulationError(f"probe.py failed: {done.stderr.strip()[-300:]}")
+            walls.append(time.perf_counter() - start)
+    return walls
 
 
 def collision_report(names: Sequence[str] | None = None) -> list[dict[str, Any]]:

@@ -1,14 +1,4 @@
-"""The thesis's robot experiments on the simulated robot (Sections 3.4.2 and 4.4).
-
-:class:`SimulatedSource` makes recognition-benchmark instances by probing an object with
-the simulated Cobra 600 (three sweeps through one point, :func:`probe_object`): each
-instance is regenerated from its seed alone, so any worker of
-:func:`recognition.benchmark.run` can make it. Its specs and instances have the fields
-that ``recognition.benchmark`` reads (:class:`SessionSpec`, :class:`ProbedInstance`), so
-that tactile_sim imports nothing of ``recognition`` but ``DataCurves``.
-:func:`catalog_experiment` is the Table 4.6 / 4.7 setting (the ten catalog objects,
-3 x 21 points at 1.2 mm, planes 60 degrees apart), :func:`solids_experiment` the Table
-4.5 one (the four solids of Fig. 4.15, n = 41, d = 0.05 mm).
+"""Outline traces of the extruded planar solids (thesis Section 3.4.2: Table 3.4, Fig. 3.8).
 
 :func:`trace_outlines` traces an extruded outline (the ellipse of Table 3.4, the closed
 cubic spline of Fig. 3.8) in a horizontal plane (:func:`trace_contour`) and measures the
@@ -17,228 +7,28 @@ sensed points against the true outline.
 
 from __future__ import annotations
 
-import hashlib
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from recognition.surfaces import DataCurves
-from tactile_sim.collision import closed_spline_outline, ellipse_outline, load_solid, solid_names
-from tactile_sim.errors import SimulationError, UnknownObject
-from tactile_sim.objects import object_names
-from tactile_sim.probing import ProbingConfig, probe_object, random_pose, trace_contour
+from tactile_sim.collision import closed_spline_outline, ellipse_outline, load_solid
+from tactile_sim.errors import UnknownObject
+from tactile_sim.evaluation.sessions import session_seed
+from tactile_sim.probing import ProbingConfig, random_pose, trace_contour
 from tactile_sim.sensor import SensorConfig
 
 __all__ = [
-    "FIG_4_15_SOLIDS",
     "OutlineTrace",
     "OutlineTraces",
-    "ProbedInstance",
-    "SessionSpec",
-    "SimulatedSource",
     "TraceConfig",
-    "catalog_experiment",
     "outline_distance",
-    "session_seed",
-    "solids_experiment",
     "spline_segment_bearings",
     "trace_outlines",
 ]
-
-#: The four algebraic objects of thesis Fig. 4.15 (the Table 4.5 columns).
-FIG_4_15_SOLIDS = ("cylinder_1", "cylinder_2", "elliptic_cylinder", "sphere")
-
-_CURVES = ("sensed", "true_contacts")
-
-
-def session_seed(base_seed: int, name: str, index: int) -> int:
-    """Returns the seed of session ``index`` of object ``name``: a hash of the three."""
-    digest = hashlib.sha256(repr(("session", base_seed, name, index)).encode()).digest()
-    return int.from_bytes(digest[:4], "little") >> 1
-
-
-@dataclass(frozen=True)
-class SessionSpec:
-    """One probing session of a benchmark (a ``recognition.benchmark.InstanceSpec``).
-
-    Attributes
-    ----------
-    model : str
-        The probed object's name.
-    index : int
-        Session number of this object.
-    vertex : None
-        Sessions choose their point p themselves.
-    seed : int
-        The session's seed (:func:`session_seed`).
-    """
-
-    model: str
-    index: int
-    vertex: None
-    seed: int
-
-    @property
-    def key(self) -> str:
-        return f"{self.model}/{self.index}"
-
-
-@dataclass(frozen=True)
-class ProbedInstance:
-    """A probing session as a benchmark instance (a ``recognition.benchmark.Instance``).
-
-    Attributes
-    ----------
-    curves : DataCurves or None
-        The data curves (world frame), None when the session failed.
-    point_in_model : (3,) float or None, metres
-        The true p, object frame.
-    info : dict
-        JSON-ready facts of the session (``error`` when it failed).
-    reference_curves : DataCurves or None
-        The other point set of the session (true contact points or sensed points).
-    """
-
-    curves: DataCurves | None
-    point_in_model: NDArray[np.float64] | None = None
-    info: dict = field(default_factory=dict)
-    reference_curves: DataCurves | None = None
-
-
-@dataclass(frozen=True)
-class SimulatedSource:
-    """Benchmark instances probed by the simulated robot (thesis Section 4.4.1).
-
-    Instance ``k`` of object ``name`` is one :func:`probe_object` session with the seed
-    :func:`session_seed` (seed, name, k): that seed draws the object's pose on the table,
-    the point p, the first plane's yaw and the sensor noise.
-
-    Attributes
-    ----------
-    objects : tuple of str
-        Catalog or solid names.
-    sessions_per_object : int
-        Sessions (instances) per object.
-    n_points : int
-        Points per curve, p included (thesis: 21 on the free-form objects, 41 on the
-        solids).
-    spacing_m : float, metres
-        Distance between neighbouring points (thesis: 1.2 mm; 0.05 mm on the solids).
-    plane_angle_deg : float, degrees
-        Angle between neighbouring sampling planes (thesis: 60).
-    curves : {"sensed", "true_contacts"}
-        What an instance's data curves are: the sensed points (the experiment), or the
-        simulator's true contact points of the same session (no sensor error: a
-        diagnosis). The other one is the instance's reference.
-    probing : ProbingConfig
-        Sweep controller.
-    sensor : SensorConfig
-        Sensor model (noise).
-    seed : int
-    """
-
-    objects: tuple[str, ...] = field(default_factory=object_names)
-    sessions_per_object: int = 3
-    n_points: int = 21
-    spacing_m: float = 1.2e-3
-    plane_angle_deg: float = 60.0
-    curves: str = "sensed"
-    probing: ProbingConfig = field(default_factory=ProbingConfig)
-    sensor: SensorConfig = field(default_factory=SensorConfig)
-    seed: int = 0
-
-    def __post_init__(self) -> None:
-        known = (*object_names(), *solid_names())
-        for name in self.objects:
-            if name not in known:
-                raise UnknownObject(name, known)
-        if self.curves not in _CURVES:
-            raise ValueError(f"curves must be one of {_CURVES}, got {self.curves!r}")
-        if self.sessions_per_object < 1:
-            raise ValueError(f"sessions_per_object must be >= 1, got {self.sessions_per_object}")
-
-    def specs(self, database=None) -> list[SessionSpec]:
-        """Returns the instance specs: ``sessions_per_object`` per object, in order.
-
-        ``database`` is not used: the objects are probed wherever the seed puts p.
-        """
-        return [
-            SessionSpec(name, k, None, session_seed(self.seed, name, k))
-            for name in self.objects
-            for k in range(self.sessions_per_object)
-        ]
-
-    def instance(self, database, spec: SessionSpec) -> ProbedInstance:
-        """Probes the spec's object with the spec's seed; returns a benchmark instance.
-
-        The instance's ``info`` holds the session's facts: probing wall and simulated
-        time, points per curve, truncated sweep sides, the sensed points' distance to
-        the true contact points (mean and max, mm) and their spacing. A session that
-        fails (a sweep left with too few points, an unreachable point, an unstable
-        simulation) gives an instance without curves whose ``info["error"]`` says why.
-        """
-        try:
-            session = probe_object(
-                spec.model,
-                seed=spec.seed,
-                n_points=self.n_points,
-                spacing_m=self.spacing_m,
-                plane_angle_deg=self.plane_angle_deg,
-                config=self.probing,
-                sensor=self.sensor,
-                progress=False,
-            )
-        except UnknownObject:
-            raise
-        except SimulationError as exc:
-            return ProbedInstance(None, None, {"error": f"{type(exc).__name__}: {exc}"})
-        truth = session.ground_truth
-        true_curves = DataCurves(
-            curves=truth.true_contact_points_in_world, approach=session.curves.approach
-        )
-        sensed_error = np.concatenate(
-            [
-                np.linalg.norm(s.points_in_world - s.true_contact_points_in_world, axis=1)
-                for s in session.sweeps
-            ]
-        )
-        steps = np.concatenate(
-            [np.linalg.norm(np.diff(s.points_in_world, axis=0), axis=1) for s in session.sweeps]
-        )
-        info = {
-            "curves": self.curves,
-            "points_per_curve": [len(c) for c in session.curves.curves],
-            "truncated": list(session.messages),
-            "probe_time_s": session.wall_seconds,
-            "sim_time_s": session.sim_seconds,
-            "sensed_error_mean_mm": float(sensed_error.mean() * 1e3),
-            "sensed_error_max_mm": float(sensed_error.max() * 1e3),
-            "spacing_mean_mm": float(steps.mean() * 1e3),
-            "spacing_std_mm": float(steps.std() * 1e3),
-        }
-        if self.curves == "sensed":
-            curves, reference = session.curves, true_curves
-        else:
-            curves, reference = true_curves, session.curves
-        return ProbedInstance(curves, np.asarray(truth.point_in_object), info, reference)
-
-
-def catalog_experiment(**overrides) -> SimulatedSource:
-    """Returns the Table 4.6 / 4.7 setting: the ten catalog objects, 3 x 21 points at
-    1.2 mm, planes 60 degrees apart (``overrides`` replace fields)."""
-    return SimulatedSource(**{"objects": object_names(), **overrides})
-
-
-def solids_experiment(**overrides) -> SimulatedSource:
-    """Returns the Table 4.5 setting: the four solids of Fig. 4.15, n = 41 points at
-    d = 0.05 mm (``overrides`` replace fields)."""
-    settings = {"objects": FIG_4_15_SOLIDS, "n_points": 41, "spacing_m": 0.05e-3}
-    return SimulatedSource(**{**settings, **overrides})
-
-
-# --- planar experiments (Section 3.4.2) -----------------------------------------------------
 
 
 @dataclass(frozen=True)
@@ -368,12 +158,15 @@ _ELLIPSE_SAMPLES = 200_000
 _SPLINE_SAMPLES_PER_SEGMENT = 40_000
 
 
-def _dense_outline(object_name: str, parameters) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+def _dense_outline(
+    object_name: str, parameters: Mapping[str, Any]
+) -> tuple[np.ndarray, np.ndarray]:
     """The true outline, object frame, densely enough that the nearest vertex gives the
     distance to within a micrometre: (m, 2) metres, and each vertex's outline parameter
     (see :attr:`OutlineTrace.outline_parameter`), (m,)."""
     if object_name == "planar_ellipse":
-        outline = ellipse_outline(*parameters["semi_axes_m"], n_segments=_ELLIPSE_SAMPLES)
+        a, b = parameters["semi_axes_m"]
+        outline = ellipse_outline(a, b, n_segments=_ELLIPSE_SAMPLES)
         return outline, np.arange(len(outline)) * (2 * math.pi / _ELLIPSE_SAMPLES)
     outline = closed_spline_outline(
         parameters["knots_m"], samples_per_segment=_SPLINE_SAMPLES_PER_SEGMENT

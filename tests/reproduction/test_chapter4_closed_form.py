@@ -6,19 +6,17 @@ each column's least error on the diagonal.
 """
 
 import json
-import sys
 from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 import pytest
+from testing_scripts import load_script
 
 from recognition.reproduction import chapter4_closed_form as c4
 
-SCRIPTS = Path(__file__).resolve().parents[2] / "scripts"
 
-
-def test_worked_example_fig_4_5():
+def test_worked_example_fig_4_5() -> None:
     result = c4.fig_4_5()
     m = result.measured
     assert m["k1_error_percent"] <= 2.0
@@ -38,7 +36,7 @@ def test_worked_example_fig_4_5():
 
 
 @pytest.mark.slow
-def test_a_few_recognition_instances():
+def test_a_few_recognition_instances() -> None:
     experiment = c4.SurfaceExperiment(instances=1, seed=7)
     records = c4.surface_instances(experiment, workers=1)
     assert [r["surface"] for r in records] == list(c4.SURFACES)
@@ -56,7 +54,7 @@ def test_a_few_recognition_instances():
 
 
 @pytest.mark.slow
-def test_tables_4_2_and_4_3_acceptance():
+def test_tables_4_2_and_4_3_acceptance() -> None:
     experiment = c4.SurfaceExperiment()
     t2 = c4.table_4_2(experiment, workers=2)
     for name, value in t2.measured["avg_distance"].items():
@@ -69,7 +67,7 @@ def test_tables_4_2_and_4_3_acceptance():
 
 
 @pytest.mark.slow
-def test_table_4_5_diagonal_is_least_in_every_column():
+def test_table_4_5_diagonal_is_least_in_every_column() -> None:
     result = c4.table_4_5()
     m = result.measured
     assert m["diagonal_minimum_in_every_column"]
@@ -81,7 +79,7 @@ def test_table_4_5_diagonal_is_least_in_every_column():
     assert set(json.loads(result.dumps())["measured"]["min_error_mm"]) == set(matrix)
 
 
-def test_tilted_planes_pass_through_p_at_the_requested_tilts():
+def test_tilted_planes_pass_through_p_at_the_requested_tilts() -> None:
     rng = np.random.default_rng(3)
     n = np.array([0.0, 0.0, 1.0])
     planes = c4.tilted_plane_normals(n, rng, 60.0, 20.0)
@@ -92,21 +90,21 @@ def test_tilted_planes_pass_through_p_at_the_requested_tilts():
     np.testing.assert_allclose(flat @ n, 0.0, atol=1e-12)
 
 
-def test_script_lists_and_runs_the_chapter_4_tables(tmp_path):
-    sys.path.insert(0, str(SCRIPTS))
-    import reproduce_thesis as script
+def test_script_lists_and_runs_the_chapter_4_tables(tmp_path: Path) -> None:
+    from recognition.reproduction.reproduce import reproduce
 
+    script = load_script("reproduce_thesis")
     config = script.parse_args(["--table", "all"])
-    assert {"fig4.5", "4.2", "4.3", "4.5"} <= set(config.tables)
+    assert {"fig4.5", "4.2", "4.3", "4.5"} <= set(config.reproduction.tables)
     out = tmp_path / "fig4_5.json"
-    script.run(replace(script.parse_args(["--table", "fig4.5"]), json_path=out))
+    reproduce(replace(script.parse_args(["--table", "fig4.5"]).reproduction, json_path=out))
     payload = json.loads(out.read_text())
     assert payload["table"] == "fig4.5"
     assert payload["measured"]["k1_error_percent"] <= 2.0
 
 
 @pytest.mark.slow
-def test_figures_are_written(tmp_path):
+def test_figures_are_written(tmp_path: Path) -> None:
     experiment = c4.SurfaceExperiment(instances=1)
     paths = c4.figures(tmp_path, experiment, workers=1)
     assert [p.name for p in paths] == [

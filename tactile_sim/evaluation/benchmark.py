@@ -1,0 +1,359 @@
+"""The benchmark runs: synthetic (thesis 4.3.4) and its sweeps, the robot experiments (4.4).
+
+:func:`run` takes a :class:`~tactile_sim.evaluation.benchmark_config.BenchmarkConfig`:
+synthetic curves on the catalog's models (or a directory of meshes), a sweep of one
+setting (Figs. 4.11-4.13), or the simulated robot's experiments (:func:`run_sim`:
+Tables 4.5-4.7 analogues, :func:`run_sensing`: the sensed points' accuracy and wall
+times). Records stream to JSONL files (resumable), reports to Markdown and PNG, the
+summary optionally to JSON.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import replace
+from pathlib import Path
+from typing import Any
+
+from recognition import ModelDatabase
+from recognition.evaluation import (
+    ClosedFormModels,
+    DatabaseHandle,
+    InstanceSpec,
+    Job,
+    MethodSummary,
+    Record,
+    instance_specs,
+    settings_key,
+    summarize,
+    summary_json,
+)
+from recognition.evaluation import run as run_jobs
+from recognition.evaluation.figures import catalog_sessions_figure, solids_figure, sweep_figure
+from recognition.evaluation.reports import RunInfo, catalog_report, machine, sweep_report
+from recognition.reproduction.chapter4_closed_form import SolidExperiment
+from recognition.surfaces.registration import RegistrationConfig
+from tactile_sim.errors import UnknownObject
+from tactile_sim.evaluation.accuracy import (
+    probe_script_seconds,
+    sensing_accuracy,
+    session_timing,
+)
+from tactile_sim.evaluation.benchmark_config import (
+    RUNS_DIR,
+    SENSING_OBJECTS,
+    SWEEPS,
+    BenchmarkConfig,
+)
+from tactile_sim.evaluation.databases import benchmark_database
+from tactile_sim.evaluation.reports import catalog_sessions_report, sensing_report, solids_report
+from tactile_sim.evaluation.sessions import (
+    FIG_4_15_SOLIDS,
+    SimulatedSource,
+    catalog_experiment,
+    solids_experiment,
+)
+
+__all__ = ["plan_jobs", "run", "run_sensing", "run_sim", "run_sweep", "run_synthetic"]
+
+Echo = Callable[[str], object]
+
+
+def plan_jobs(
+    specs: Sequence[InstanceSpec],
+    source: Any,
+    configs: Mapping[str, RegistrationConfig],
+    thesis_instances: int,
+) -> list[Job]:
+    """One job per instance with the registration of every method; thesis mode (about a
+    minute an instance) only on the first ``thesis_instances`` (0: all), spread over the
+    models: instance 0 of each, then 1, ..."""
+    first = sorted(specs, key=lambda s: (s.index, s.model))[: thesis_instances or len(specs)]
+    thesis_keys = {s.key for s in first}
+    jobs = []
+    for spec in specs:
+        chosen = tuple(c for m, c in configs.items() if m != "thesis" or spec.key in thesis_keys)
+        if chosen:
+            jobs.append(Job(spec, source, chosen))
+    return jobs
+
+
+def _records(
+    config: BenchmarkConfig, handle: DatabaseHandle, jobs: Sequence[Job], path: Path
+) -> list[Record]:
+    """The jobs' records (resumed from ``path``) on the configured workers and backend;
+    records of other instances, methods or settings in ``path`` are left out."""
+    records = run_jobs(
+        handle,
+        jobs,
+        path,
+        workers=config.run.workers,
+        backend=config.run.backend,
+        ray_address=config.run.ray_address,
+        progress=config.run.progress,
+    )
+    wanted = {(j.spec.key, c.mode.value, j.settings(c)) for j in jobs for c in j.configs}
+    return [r for r in records if (r.instance, r.method, r.settings) in wanted]
+
+
+def _directory(database: ModelDatabase) -> Path:
+    """Where the workers load ``database`` from."""
+    if database.directory is None:
+        raise ValueError("the benchmark's workers load the database from disk: save it first")
+    return database.directory
+
+
+def _results_path(
+    config: BenchmarkConfig, name: str, source: Any, registration: RegistrationConfig, tag: str
+) -> Path:
+    if config.run.results is not None:
+        return config.run.results
+    key = settings_key(source, registration)
+    return Path(config.run.records_dir) / f"{name}{tag}_{key}.jsonl"
+
+
+def _shown(path: Path) -> str:
+    """``path`` as a report shows it: from the project's root when inside it."""
+    path = Path(path).resolve()
+    root = RUNS_DIR.parent
+    return str(path.relative_to(root) if path.is_relative_to(root) else path)
+
+
+def _write_json(path: Path, payload: object) -> None:
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_suffix(path.suffix + ".tmp")
+    tmp.write_text(json.dumps(payload, indent=2))
+    tmp.replace(path)
+
+
+def _run_info(config: BenchmarkConfig, started: str) -> RunInfo:
+    return RunInfo(config.report.command, started, config.run.workers, config.run.backend)
+
+
+def _write_report(config: BenchmarkConfig, file_name: str, text: str, echo: Echo) -> None:
+    out = Path(config.report.out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    (out / file_name).write_text(text)
+    echo(text)
+
+
+def run(config: BenchmarkConfig, *, echo: Echo = print) -> dict[str, Any]:
+    """Run the benchmark of ``config``; write records, reports and the summary JSON.
+
+    Returns
+    -------
+    dict
+        The JSON summary: per method (and ``sensing``), or a sweep's points.
+    """
+    if config.source == "sim":
+        return run_sim(config, echo=echo)
+    database, name = benchmark_database(config.meshes, echo=echo)
+    started = time.strftime("%Y-%m-%d %H:%M")
+    if config.sweep:
+        return run_sweep(config, database, name, started, echo=echo)
+    return run_synthetic(config, database, name, started, echo=echo)
+
+
+def run_synthetic(
+    config: BenchmarkConfig, database: ModelDatabase, name: str, started: str, *, echo: Echo = print
+) -> dict[str, Any]:
+    """Synthetic instances on ``database`` recognised with every method (thesis 4.3.4);
+    writes ``<name><tag>.md``; returns the summary per method."""
+    syn, methods = config.synthetic, config.methods
+    source = syn.source()
+    path = _results_path(config, name, source, methods.config(), "")
+    jobs = plan_jobs(
+        instance_specs(database, source), source, methods.configs(), methods.thesis_instances
+    )
+    records = _records(config, _directory(database), jobs, path)
+    summary = summarize(records)
+    payload = summary_json(summary)
+    if config.report.json_path:
+        _write_json(config.report.json_path, payload)
+    settings = (
+        f"Instances: {syn.per_model} per model, n = {syn.n_points} points per curve at "
+        f"d = {syn.spacing_mm} mm (l = {(syn.n_points - 1) * syn.spacing_mm:g} mm), "
+        f"planes {syn.plane_angle_deg:g} deg apart, noise sigma {syn.noise_mm} mm, "
+        f"delta = {methods.delta_per_mm} 1/mm. Thesis mode on the first "
+        f"{methods.thesis_instances or 'all'} instances. Records: `{_shown(path)}`."
+    )
+    text = catalog_report(name, _run_info(config, started), settings, database, records, summary)
+    _write_report(config, f"{name}{config.report.tag}.md", text, echo)
+    return payload
+
+
+def run_sweep(
+    config: BenchmarkConfig, database: ModelDatabase, name: str, started: str, *, echo: Echo = print
+) -> dict[str, Any]:
+    """Fast-mode success and time against one setting (``config.sweep``: thesis Figs.
+    4.11-4.13); writes ``sweep_<name>`` .json, .png and .md; returns the JSON payload."""
+    if config.sweep is None:
+        raise ValueError("run_sweep needs config.sweep")
+    sweep = SWEEPS[config.sweep]
+    syn, methods = config.synthetic, config.methods
+    results: dict[float, MethodSummary] = {}
+    for value in sweep.values:
+        n_points = plane_angle_deg = delta_per_mm = None
+        if sweep.parameter == "length_mm":
+            n_points = round(value / syn.spacing_mm) + 1
+        elif sweep.parameter == "plane_angle_deg":
+            plane_angle_deg = value
+        else:
+            delta_per_mm = value
+        source = syn.source(n_points=n_points, plane_angle_deg=plane_angle_deg)
+        registration = methods.config("fast", delta_per_mm)
+        path = _results_path(config, name, source, registration, f"_sweep_{config.sweep}")
+        jobs = plan_jobs(
+            instance_specs(database, source),
+            source,
+            {"fast": registration},
+            methods.thesis_instances,
+        )
+        records = _records(config, _directory(database), jobs, path)
+        results[value] = summarize(records)["fast"]
+    stem = f"sweep_{config.sweep}"
+    payload = {
+        "parameter": sweep.parameter,
+        "figure": sweep.figure,
+        "date": started,
+        "machine": machine(),
+        "points": [{"value": v, **s.to_json()} for v, s in results.items()],
+    }
+    out = Path(config.report.out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    _write_json(out / f"{stem}.json", payload)
+    sweep_figure(results, sweep.parameter, sweep.figure, out / f"{stem}.png")
+    settings = (
+        f"Instances: {syn.per_model} per model; unless swept, n = {syn.n_points} "
+        f"points per curve at d = {syn.spacing_mm} mm, planes "
+        f"{syn.plane_angle_deg:g} deg apart, noise sigma {syn.noise_mm} mm, "
+        f"delta = {methods.delta_per_mm} 1/mm. Values: `{stem}.json`."
+    )
+    text = sweep_report(
+        sweep.parameter,
+        sweep.figure,
+        name,
+        _run_info(config, started),
+        settings,
+        results,
+        f"{stem}.png",
+        sweep.thesis,
+    )
+    _write_report(config, f"{stem}.md", text, echo)
+    return payload
+
+
+def _sim_source(config: BenchmarkConfig, experiment: str) -> SimulatedSource | None:
+    """The experiment's probing settings with the configured overrides (None: none of
+    its objects is to be probed)."""
+    sim = config.sim
+    make = catalog_experiment if experiment == "catalog" else solids_experiment
+    source = make(sessions_per_object=sim.sessions, curves=sim.curves, seed=sim.seed)
+    if sim.spacing_mm is not None:
+        source = replace(source, spacing_m=sim.spacing_mm * 1e-3)
+    if sim.objects is not None:
+        kept = tuple(o for o in source.objects if o in sim.objects)
+        if not kept:
+            return None
+        source = replace(source, objects=kept)
+    return source
+
+
+def run_sim(config: BenchmarkConfig, *, echo: Echo = print) -> dict[str, Any]:
+    """The simulated robot experiments (thesis Section 4.4); returns the summary per method
+    (and ``sensing``).
+
+    "catalog": every catalog object probed ``sessions`` times, recognised against the
+    catalog database with every method (Tables 4.6-4.7 analogue). "solids": the four
+    solids of Fig. 4.15 probed ``sessions`` times, recognised against their closed-form
+    models (Table 4.5 analogue, method ``closed-form``). "sensing": :func:`run_sensing`.
+    """
+    from tactile_sim.objects import object_names
+
+    known = (*object_names(), *FIG_4_15_SOLIDS)
+    for name in config.sim.objects or ():
+        if name not in known:
+            raise UnknownObject(name, known)
+    started = time.strftime("%Y-%m-%d %H:%M")
+    summary: dict[str, Any] = {}
+    tag = config.report.tag
+    for experiment in config.sim.experiments:
+        if experiment == "sensing":
+            summary["sensing"] = run_sensing(config, started, echo=echo)
+            continue
+        source = _sim_source(config, experiment)
+        if source is None:
+            continue
+        handle: DatabaseHandle
+        if experiment == "catalog":
+            from tactile_sim.objects.database import catalog_database
+
+            database = catalog_database()
+            handle, names = _directory(database), database.names
+            registration = config.methods.config()
+            configs = config.methods.configs()
+        else:
+            models = ClosedFormModels()
+            handle, names = models, models.names
+            registration = SolidExperiment().config()
+            configs = {registration.mode.value: registration}
+        name = f"sim_{experiment}"
+        path = _results_path(config, name, source, registration, tag)
+        jobs = plan_jobs(source.specs(None), source, configs, config.methods.thesis_instances)
+        records = _records(config, handle, jobs, path)
+        found = summarize(records)
+        summary |= summary_json(found)
+        out = Path(config.report.out_dir)
+        out.mkdir(parents=True, exist_ok=True)
+        figure = out / f"{name}{tag}.png"
+        run_info = _run_info(config, started)
+        if experiment == "catalog":
+            text = catalog_sessions_report(
+                run_info,
+                source,
+                names,
+                records,
+                found,
+                _shown(path),
+                delta_per_mm=config.methods.delta_per_mm,
+                thesis_instances=config.methods.thesis_instances,
+            )
+            catalog_sessions_figure(records, names, figure)
+        else:
+            text = solids_report(
+                run_info, source, names, records, found, _shown(path), SolidExperiment()
+            )
+            solids_figure(records, names, figure)
+        text += f"\n![{name}]({figure.name})\n"
+        _write_report(config, f"{name}{tag}.md", text, echo)
+    if config.report.json_path:
+        _write_json(config.report.json_path, summary)
+    return summary
+
+
+def run_sensing(config: BenchmarkConfig, started: str, *, echo: Echo = print) -> dict[str, Any]:
+    """Sensed points against the original meshes; warm wall times of a session and of
+    ``scripts/probe.py`` (a fresh process, as a user runs it; the first run warms the
+    caches). Writes ``sim_sensing<tag>.md``; returns the figures (millimetres, seconds)."""
+    sim = config.sim
+    objects = sim.objects or SENSING_OBJECTS
+    accuracy = sensing_accuracy(objects, sessions_per_object=sim.sessions, seed=sim.seed)
+    timing = session_timing(objects[0], repeats=3, seed=sim.seed)
+    walls = probe_script_seconds(objects[0], runs=4, seed=sim.seed)
+    figures = accuracy.summary() | {
+        "session_object": objects[0],
+        "session_build_s": list(timing.build_seconds),
+        "session_probe_s": list(timing.probe_seconds),
+        "session_total_s": list(timing.session_seconds),
+        "session_sim_s": list(timing.sim_seconds),
+        "probe_script_cold_or_first_s": walls[0],
+        "probe_script_warm_s": walls[1:],
+    }
+    text = sensing_report(
+        _run_info(config, started), objects, sim.sessions, sim.seed, accuracy, timing, walls
+    )
+    _write_report(config, f"sim_sensing{config.report.tag}.md", text, echo)
+    return figures

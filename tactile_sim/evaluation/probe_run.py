@@ -1,0 +1,164 @@
+"""One probing run end to end: probe an object, recognise it, measure it against the truth, save.
+
+What ``scripts/probe.py`` (and ``make demo``) runs: the simulated robot probes a catalog
+object (:func:`~tactile_sim.probing.probe_object`), the catalog database recognises the
+curves, the estimate is compared with the ground truth, and the curves (.npz) and the
+recording (.rrd) are saved.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from recognition.rigid import rotation_angle
+from tactile_sim.evaluation.benchmark_config import RUNS_DIR
+
+__all__ = ["RERUN_MODES", "ProbeRunConfig", "pose_error", "probe_run"]
+
+#: What is done with the recording: saved, shown in a native viewer, served to a browser,
+#: or not made.
+RERUN_MODES = ("save", "spawn", "serve", "off")
+
+
+@dataclass(frozen=True)
+class ProbeRunConfig:
+    """What to probe and where to put the results.
+
+    Attributes
+    ----------
+    object_name : str
+        A catalog object (``tactile_sim.objects.object_names()``).
+    seed : int
+        Seeds the object's pose, the probed point, the planes and the sensor noise.
+    n_points, spacing_mm, plane_angle_deg
+        Points per curve, their spacing and the angle between sampling planes
+        (thesis Section 4.4.3: 21, 1.2 mm, 60 degrees).
+    out : Path or None
+        Directory for the curves (.npz) and the recording; default runs/.
+    rerun : str
+        "save" (an .rrd file), "spawn" (open the viewer), "serve" (web viewer on
+        127.0.0.1) or "off".
+    web_port, grpc_port : int
+        Ports of the web viewer ("serve"): HTTP for the page, gRPC for the data.
+    trajectory_hz : float
+        Rate (per second of simulated time) at which the recording samples the robot.
+    """
+
+    object_name: str = "cat"
+    seed: int = 0
+    n_points: int = 21
+    spacing_mm: float = 1.2
+    plane_angle_deg: float = 60.0
+    out: Path | None = None
+    rerun: str = "save"
+    web_port: int = 9090
+    grpc_port: int = 9876
+    trajectory_hz: float = 200.0
+
+    @property
+    def out_dir(self) -> Path:
+        """Where the run's files go."""
+        return Path(self.out) if self.out else RUNS_DIR
+
+
+def pose_error(
+    T_estimated: np.ndarray, T_true: np.ndarray, points: np.ndarray
+) -> tuple[float, float]:
+    """Returns the rotation error (degrees) between two 4x4 poses and the mean distance
+    (metres) between where they put ``points`` (n, 3): the data on the model."""
+    angle = np.degrees(rotation_angle(T_estimated[:3, :3] @ T_true[:3, :3].T))
+    moved = points @ (T_estimated[:3, :3] - T_true[:3, :3]).T + (T_estimated - T_true)[:3, 3]
+    return float(angle), float(np.linalg.norm(moved, axis=1).mean())
+
+
+def probe_run(config: ProbeRunConfig) -> dict[str, Any]:
+    """Probe, recognise, compare with the ground truth, save curves and recording.
+
+    Returns
+    -------
+    dict
+        JSON-ready: ``object``, ``seed``, ``recognized``, ``correct``, ``ranking_mm``
+        (None: rejected at table lookup), ``margin_mm``, ``truncated_sweeps``,
+        ``timings_s``, ``location_error_mm``, ``pose_error_deg``, ``pose_error_mm`` (when
+        the true model located p), ``curves_file`` and ``recording`` (unless off).
+
+    Raises
+    ------
+    UnknownObject
+        ``object_name`` is not a catalog object.
+    PortInUse, RecordingError
+        The viewer cannot be served or shown (checked before probing).
+    """
+    from tactile_sim.errors import UnknownObject
+    from tactile_sim.objects import object_names
+    from tactile_sim.objects.database import catalog_database
+    from tactile_sim.probing import probe_object
+
+    if config.object_name not in object_names():
+        raise UnknownObject(config.object_name, object_names())
+    if config.rerun == "serve":
+        from tactile_sim.recording import check_ports
+
+        check_ports(config.web_port, config.grpc_port)
+    elif config.rerun == "spawn":
+        from tactile_sim.recording import check_display
+
+        check_display()
+    start = time.perf_counter()
+    database = catalog_database()
+    loaded = time.perf_counter()
+    session = probe_object(
+        config.object_name,
+        seed=config.seed,
+        n_points=config.n_points,
+        spacing_m=config.spacing_mm * 1e-3,
+        plane_angle_deg=config.plane_angle_deg,
+        trajectory_hz=None if config.rerun == "off" else config.trajectory_hz,
+    )
+    probed = time.perf_counter()
+    result = database.recognize(session.curves)
+    recognized = time.perf_counter()
+
+    truth = session.ground_truth
+    T_object_from_world = np.linalg.inv(truth.T_world_from_object)
+    summary: dict[str, Any] = {
+        "object": config.object_name,
+        "seed": config.seed,
+        "recognized": result.name,
+        "correct": result.name == config.object_name,
+        "ranking_mm": [(n, e * 1e3 if np.isfinite(e) else None) for n, e in result.ranking],
+        "margin_mm": result.margin_m * 1e3,
+        "truncated_sweeps": list(session.messages),
+        "timings_s": {
+            "database": loaded - start,
+            "probing": probed - loaded,
+            "recognition": recognized - probed,
+            "total": recognized - start,
+        },
+    }
+    own = result.registrations[config.object_name]
+    if np.all(np.isfinite(own.location)):
+        summary["location_error_mm"] = float(
+            np.linalg.norm(own.location - truth.point_in_object) * 1e3
+        )
+        data = np.concatenate(session.curves.curves)
+        angle, shift = pose_error(own.T_model_from_data, T_object_from_world, data)
+        summary["pose_error_deg"], summary["pose_error_mm"] = angle, shift * 1e3
+
+    out = config.out_dir
+    out.mkdir(parents=True, exist_ok=True)
+    stem = f"{time.strftime('%Y%m%d-%H%M%S')}_{config.object_name}_seed{config.seed}"
+    session.curves.save(out / f"{stem}_curves.npz")
+    summary["curves_file"] = str(out / f"{stem}_curves.npz")
+    if config.rerun != "off":
+        from tactile_sim.recording import record_probe_run
+
+        summary["recording"] = record_probe_run(
+            session, result, database, mode=config.rerun, path=out / f"{stem}.rrd"
+        )
+    return summary
