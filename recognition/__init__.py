@@ -4,6 +4,9 @@ Pure geometry (numpy/scipy/trimesh): Chapter 3 of the thesis lives in
 :mod:`recognition.curves`, Chapter 4 in :mod:`recognition.surfaces`.
 
     from recognition import DataCurves, ModelDatabase, Recognition
+
+The registration settings are one frozen config per mode (``FastConfig``,
+``ThesisConfig``, ``IcpConfig``, ``ClosedFormConfig``; ``config_for(mode, **fields)``).
 """
 
 from recognition.errors import (
@@ -16,12 +19,23 @@ from recognition.errors import (
 from recognition.surfaces.data_curves import DataCurves
 from recognition.surfaces.database import DATABASE_FORMAT, ModelDatabase
 from recognition.surfaces.mesh_model import MeshModelConfig
-from recognition.surfaces.registration import Recognition
+from recognition.surfaces.registration import (
+    ClosedFormConfig,
+    FastConfig,
+    IcpConfig,
+    Recognition,
+    RegistrationConfig,
+    ThesisConfig,
+    config_for,
+)
 
 __all__ = [
     "DATABASE_FORMAT",
+    "ClosedFormConfig",
     "DataCurves",
     "DegenerateGeometry",
+    "FastConfig",
+    "IcpConfig",
     "InvalidCurveData",
     "InvalidModel",
     "MeshModelConfig",
@@ -29,4 +43,7 @@ __all__ = [
     "NoRealSolution",
     "Recognition",
     "RecognitionError",
+    "RegistrationConfig",
+    "ThesisConfig",
+    "config_for",
 ]

@@ -17,7 +17,7 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-from recognition import ModelDatabase
+from recognition import ModelDatabase, RegistrationConfig
 from recognition.evaluation import (
     ClosedFormModels,
     DatabaseHandle,
@@ -34,7 +34,6 @@ from recognition.evaluation import run as run_jobs
 from recognition.evaluation.figures import catalog_sessions_figure, solids_figure, sweep_figure
 from recognition.evaluation.reports import RunInfo, catalog_report, machine, sweep_report
 from recognition.reproduction.chapter4_closed_form import SolidExperiment
-from recognition.surfaces.registration import RegistrationConfig
 from tactile_sim.errors import UnknownObject
 from tactile_sim.evaluation.accuracy import (
     probe_script_seconds,

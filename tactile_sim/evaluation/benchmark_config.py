@@ -14,8 +14,8 @@ import shlex
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from recognition import RegistrationConfig, config_for
 from recognition.evaluation import SyntheticSource
-from recognition.surfaces.registration import RegistrationConfig, config_for
 
 __all__ = [
     "EXPERIMENTS",
