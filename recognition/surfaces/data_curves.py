@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 import tempfile
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -75,6 +76,10 @@ class DataCurves:
         Unit direction in which the sensor approached the surface (pointing into the
         object), same frame as the curves. It orients the surface normal outward; when
         None, registration tries both orientations.
+    normals : tuple of (n_i, 3) float arrays or None
+        The sensor's estimate of the outward surface normal at every point (unit
+        vectors, same frame), when it gives one; the normal at p takes them into account
+        (:func:`~recognition.surfaces.local_geometry.local_surface_geometry`).
 
     The common point :attr:`intersection` is the mean of the pairwise closest points of
     the curves. Construction validates the data and raises
@@ -86,6 +91,7 @@ class DataCurves:
     curves: tuple[Array, ...]
     meet_tolerance_m: float = MEET_TOLERANCE_M
     approach: Array | None = None
+    normals: tuple[Array, ...] | None = None
     intersection: Array = field(init=False, repr=False, compare=False)
     gap_m: float = field(init=False, repr=False, compare=False)
 
@@ -99,6 +105,8 @@ class DataCurves:
             if v.shape != (3,) or not np.all(np.isfinite(v)) or not np.linalg.norm(v) > 0:
                 raise InvalidCurveData(f"approach must be a finite non-zero 3-vector, got {v}")
             object.__setattr__(self, "approach", v / np.linalg.norm(v))
+        if self.normals is not None:
+            object.__setattr__(self, "normals", self._validated_normals(self.normals, curves))
         pairs = []
         gap = 0.0
         for i in range(len(curves)):
@@ -133,6 +141,32 @@ class DataCurves:
             )
         c.setflags(write=False)
         return c
+
+    @staticmethod
+    def _validated_normals(
+        normals: Sequence[ArrayLike], curves: tuple[Array, ...]
+    ) -> tuple[Array, ...]:
+        try:
+            arrays = tuple(np.array(n, dtype=float) for n in normals)
+        except (TypeError, ValueError) as exc:
+            raise InvalidCurveData(f"normals must be one (n_i, 3) array per curve: {exc}") from exc
+        if len(arrays) != len(curves):
+            raise InvalidCurveData(
+                f"expected one normal array per curve ({len(curves)}), got {len(arrays)}"
+            )
+        out = []
+        for i, (n, c) in enumerate(zip(arrays, curves, strict=True)):
+            if n.shape != c.shape:
+                raise InvalidCurveData(
+                    f"normals of curve {i} must have the curve's shape {c.shape}, got {n.shape}"
+                )
+            length = np.linalg.norm(n, axis=1)
+            if not np.all(np.isfinite(n)) or not np.all(length > 0):
+                raise InvalidCurveData(f"normals of curve {i} must be finite non-zero vectors")
+            unit = n / length[:, None]
+            unit.setflags(write=False)
+            out.append(unit)
+        return tuple(out)
 
     def _check_tangents(self) -> None:
         """Tangents at p must not be parallel; the sampling planes must differ."""
@@ -182,10 +216,12 @@ class DataCurves:
         """The curves moved by a (4, 4) rigid transform ``T`` (translation in metres)."""
         T = np.asarray(T, dtype=float)
         approach = None if self.approach is None else T[:3, :3] @ self.approach
+        normals = None if self.normals is None else tuple(n @ T[:3, :3].T for n in self.normals)
         return DataCurves(
             tuple(c @ T[:3, :3].T + T[:3, 3] for c in self.curves),
             self.meet_tolerance_m,
             approach,
+            normals,
         )
 
     def save(self, path: str | os.PathLike[str]) -> Path:
@@ -195,6 +231,8 @@ class DataCurves:
         arrays["meet_tolerance_m"] = np.array(self.meet_tolerance_m)
         if self.approach is not None:
             arrays["approach"] = self.approach
+        for i, n in enumerate(self.normals or ()):
+            arrays[f"normals_{i}"] = n
         path.parent.mkdir(parents=True, exist_ok=True)
         fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".npz.tmp")
         try:
@@ -219,6 +257,12 @@ class DataCurves:
                 curves = tuple(z[k] for k in keys)
                 tol = float(z["meet_tolerance_m"]) if "meet_tolerance_m" in z.files else None
                 approach = z["approach"] if "approach" in z.files else None
+                normal_keys = [f"normals_{i}" for i in range(len(keys))]
+                normals = (
+                    tuple(z[k] for k in normal_keys)
+                    if all(k in z.files for k in normal_keys)
+                    else None
+                )
         except (OSError, ValueError, KeyError) as exc:
             raise InvalidCurveData(f"cannot read data curves from {path}: {exc}") from exc
-        return cls(curves, tol if tol is not None else MEET_TOLERANCE_M, approach)
+        return cls(curves, tol if tol is not None else MEET_TOLERANCE_M, approach, normals)

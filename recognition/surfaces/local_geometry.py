@@ -33,6 +33,11 @@ FIT_HALF_LENGTH_M = 4.5e-3
 #: Default degree of the polynomial fitted to each data curve around p.
 FIT_DEGREE = 4
 
+#: The plane and polynomial fits leave out points whose residual exceeds ``TRIM_SIGMAS``
+#: robust standard deviations and ``TRIM_FLOOR_M`` (a gross outlier), refitting at most
+#: ``TRIM_PASSES`` times.
+TRIM_SIGMAS, TRIM_FLOOR_M, TRIM_PASSES = 6.0, 0.02e-3, 2
+
 
 @dataclass(frozen=True)
 class CurveFrame:
@@ -110,10 +115,24 @@ class LocalSurfaceGeometry:
         return np.column_stack([self.d1, self.d2, self.normal])
 
 
+def _gross(residuals: Array) -> NDArray[np.bool_]:
+    """Residuals too large for the rest to explain: beyond ``TRIM_SIGMAS`` robust
+    standard deviations (1.4826 times the median absolute residual) and ``TRIM_FLOOR_M``."""
+    a = np.abs(residuals)
+    return np.asarray(a > max(TRIM_SIGMAS * 1.4826 * float(np.median(a)), TRIM_FLOOR_M))
+
+
 def _plane_fit(points: Array) -> tuple[Array, Array]:
-    """Centroid (3,) and the (3, 3) right singular vectors of the centred points."""
-    centroid = points.mean(axis=0)
-    _, _, vt = np.linalg.svd(points - centroid, full_matrices=False)
+    """Centroid (3,) and the (3, 3) right singular vectors of the centred points, after
+    leaving out points grossly off the plane of the others (:func:`_gross`)."""
+    keep = np.ones(len(points), bool)
+    for _ in range(TRIM_PASSES + 1):
+        centroid = points[keep].mean(axis=0)
+        _, _, vt = np.linalg.svd(points[keep] - centroid, full_matrices=False)
+        gross = _gross((points - centroid) @ vt[2])
+        if not (gross & keep).any() or np.count_nonzero(keep & ~gross) < 3:
+            break
+        keep &= ~gross
     return centroid, vt  # rows: two in-plane directions, then the plane normal
 
 
@@ -129,7 +148,8 @@ def curve_frame_at(
     A plane is fitted to the whole curve; in that plane a polynomial ``y = f(x)`` (the
     thesis uses a quadratic) is fitted over the points within ``half_length_m`` of p,
     in a frame whose x axis is the local chord; tangent, normal and curvature come from
-    its derivatives at the abscissa of p.
+    its derivatives at the abscissa of p. Both fits leave out gross outliers (residuals
+    beyond ``TRIM_SIGMAS`` robust standard deviations and ``TRIM_FLOOR_M``).
 
     Parameters
     ----------
@@ -162,7 +182,13 @@ def curve_frame_at(
     rel = local - p
     x, y = rel @ ex, rel @ ey
     scale = max(np.abs(x).max(), 1e-12)
-    coef = np.polynomial.polynomial.polyfit(x / scale, y, degree)
+    keep = np.ones(len(x), bool)
+    for _ in range(TRIM_PASSES + 1):
+        coef = np.polynomial.polynomial.polyfit(x[keep] / scale, y[keep], degree)
+        gross = _gross(y - np.polynomial.polynomial.polyval(x / scale, coef))
+        if not (gross & keep).any() or np.count_nonzero(keep & ~gross) < degree + 2:
+            break
+        keep &= ~gross
     y0 = coef[0]
     y1 = coef[1] / scale
     y2 = 2.0 * coef[2] / scale**2
@@ -258,6 +284,17 @@ def principal_curvatures_from_normal_curvatures(
     return float(w[1]), float(w[0]), float(np.arctan2(v[1, 1], v[0, 1])), condition
 
 
+def _measured_normals_at(curves: DataCurves, p: Array) -> Array | None:
+    """The sensor's normals (k, 3) at the point of each curve nearest p, or None."""
+    if curves.normals is None:
+        return None
+    rows = [
+        n[int(np.argmin(np.linalg.norm(c - p, axis=1)))]
+        for c, n in zip(curves.curves, curves.normals, strict=True)
+    ]
+    return np.array(rows)
+
+
 def local_surface_geometry(
     curves: DataCurves,
     *,
@@ -270,19 +307,29 @@ def local_surface_geometry(
     ``point`` ((3,), metres; default ``curves.intersection``) is where the curves are
     fitted and the geometry evaluated.
 
-    With ``curves.approach`` the normal points against the approach (out of the object);
-    otherwise it is oriented so that the mean normal curvature is positive (the data are
-    taken as seen from outside a locally convex surface) and ``oriented`` is False.
+    When the curves carry the sensor's normals, those of the points nearest p join the
+    tangents in (4.1): N minimises sum_i (N . T_i)^2 + sum_j (1 - (N . n_j)^2), each
+    measured normal n_j counting as much as one tangent, and they orient N outward.
+    Otherwise, with ``curves.approach`` the normal points against the approach (out of
+    the object); else it is oriented so that the mean normal curvature is positive (the
+    data are taken as seen from outside a locally convex surface) and ``oriented`` is
+    False.
     """
     p = curves.intersection if point is None else np.asarray(point, dtype=float)
     frames = tuple(
         curve_frame_at(c, p, half_length_m=half_length_m, degree=degree) for c in curves.curves
     )
     tangents = np.array([f.tangent for f in frames])
-    normal = surface_normal(tangents)
+    measured = _measured_normals_at(curves, p)
+    if measured is None:
+        normal = surface_normal(tangents)
+    else:
+        M = tangents.T @ tangents + len(measured) * np.eye(3) - measured.T @ measured
+        normal = np.linalg.eigh(M)[1][:, 0]
+        normal = normal if normal @ measured.sum(axis=0) >= 0 else -normal
     approach = curves.approach
-    oriented = approach is not None
-    if approach is not None:
+    oriented = approach is not None or measured is not None
+    if approach is not None and measured is None:
         normal = -normal if normal @ approach > 0 else normal
     kn = np.array([normal_curvature(f, normal) for f in frames])
     if not oriented and kn.mean() < 0:

@@ -136,3 +136,36 @@ def test_closest_points_between_crossing_segments():
     np.testing.assert_allclose(pa, [0.25, 0.0, 0.0])
     np.testing.assert_allclose(pb, [0.25, 0.0, 0.5])
     assert d == pytest.approx(0.5)
+
+
+def bowl_normals(curve):
+    """Outward unit normals of z = -(x^2 + y^2) / 0.04 at the curve's points."""
+    n = np.column_stack([curve[:, 0] / 0.02, curve[:, 1] / 0.02, np.ones(len(curve))])
+    return n / np.linalg.norm(n, axis=1, keepdims=True)
+
+
+def test_normals_are_validated_made_unit_moved_and_saved(tmp_path):
+    curves = three()
+    normals = tuple(3.0 * bowl_normals(c) for c in curves)
+    data = DataCurves(curves, normals=normals)
+    np.testing.assert_allclose(np.linalg.norm(np.concatenate(data.normals), axis=1), 1.0)
+    with pytest.raises(InvalidCurveData, match="one normal array per curve"):
+        DataCurves(curves, normals=normals[:2])
+    with pytest.raises(InvalidCurveData, match="must have the curve's shape"):
+        DataCurves(curves, normals=(normals[0][:-1], *normals[1:]))
+    bad = normals[0].copy()
+    bad[3] = 0.0
+    with pytest.raises(InvalidCurveData, match="finite non-zero"):
+        DataCurves(curves, normals=(bad, *normals[1:]))
+    rng = np.random.default_rng(3)
+    q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+    q *= np.sign(np.linalg.det(q))
+    T = np.eye(4)
+    T[:3, :3], T[:3, 3] = q, [0.1, -0.2, 0.3]
+    moved = data.transformed(T)
+    for a, b in zip(data.normals, moved.normals, strict=True):
+        np.testing.assert_allclose(b, a @ q.T, atol=1e-12)
+    loaded = DataCurves.load(data.save(tmp_path / "normals.npz"))
+    for a, b in zip(data.normals, loaded.normals, strict=True):
+        np.testing.assert_allclose(a, b, atol=1e-15)
+    assert DataCurves.load(DataCurves(curves).save(tmp_path / "none.npz")).normals is None

@@ -207,3 +207,33 @@ def test_too_few_points_for_the_fit_is_degenerate():
         local_surface_geometry(DataCurves(curves), half_length_m=2.0, degree=4)
     g = local_surface_geometry(DataCurves(curves), half_length_m=2.0, degree=2)
     assert (g.k1, g.k2) == pytest.approx((1.0, 1.0), rel=1e-9)
+
+
+def test_measured_normals_inform_and_orient_the_normal_at_p():
+    """Tangents at p only 10 degrees apart leave the normal poorly determined by noisy
+    curves alone (1.4 degrees RMS); the sensor's normals (each about 0.8 degree off, as
+    the simulated sensor's) pin it, and orient it outward without an approach
+    direction."""
+    s = cf.sphere(0.03)
+    alone, sensed = [], []
+    for seed in range(10):
+        rng = np.random.default_rng(seed)
+        synthetic = implicit_data_curves(
+            s,
+            s.sigma(0.7, 1.1),
+            n_points=41,
+            spacing=0.3e-3,
+            plane_angle_deg=10.0,
+            noise_std=0.02e-3,
+            rng=rng,
+        )
+        curves = synthetic.curves.curves
+        true_normal = synthetic.T_model_from_data[:3, :3].T @ synthetic.normal_in_model
+        normals = tuple(true_normal + rng.normal(scale=0.01, size=(len(c), 3)) for c in curves)
+        g = local_surface_geometry(DataCurves(curves, normals=normals), half_length_m=3e-3)
+        assert g.oriented and g.normal @ true_normal > 0
+        sensed.append(angle_deg(g.normal, true_normal))
+        g = local_surface_geometry(DataCurves(curves), half_length_m=3e-3)
+        alone.append(angle_deg(g.normal, true_normal))
+    assert max(sensed) < 1.5
+    assert np.sqrt(np.mean(np.square(sensed))) < 0.5 * np.sqrt(np.mean(np.square(alone)))
