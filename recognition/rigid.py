@@ -103,10 +103,12 @@ def rotation_2d(theta: ArrayLike) -> Array:
 
 
 def pose_matrix(R: ArrayLike, t: ArrayLike) -> Array:
-    """The homogeneous pose of rotation R (d, d) and translation t (d,), (d + 1, d + 1)."""
+    """The homogeneous pose of rotation R (..., d, d) and translation t (..., d),
+    (..., d + 1, d + 1)."""
     R, t = np.asarray(R, dtype=float), np.asarray(t, dtype=float)
-    T = np.eye(len(t) + 1)
-    T[:-1, :-1], T[:-1, -1] = R, t
+    d = t.shape[-1]
+    T = np.zeros((*t.shape[:-1], d + 1, d + 1))
+    T[..., :-1, :-1], T[..., :-1, -1], T[..., -1, -1] = R, t, 1.0
     return T
 
 

@@ -515,7 +515,7 @@ class MeshModel:
     def distance(self) -> MeshDistance:
         """Exact point-to-mesh distances."""
         if self._distance is None:
-            self._distance = MeshDistance(self.vertices, self.faces, self.tree)
+            self._distance = MeshDistance(self.vertices, self.faces)
         return self._distance
 
     def cell_keys(self, spacing: float) -> IntArray:

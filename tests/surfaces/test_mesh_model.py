@@ -6,7 +6,7 @@ import trimesh
 from testing_meshes import blob, cylinder, sphere, torus
 
 from recognition.errors import InvalidModel
-from recognition.surfaces.distance import MeshDistance, closest_point_on_triangles
+from recognition.surfaces.distance import MeshDistance
 from recognition.surfaces.mesh_model import (
     MeshModel,
     MeshModelConfig,
@@ -15,6 +15,57 @@ from recognition.surfaces.mesh_model import (
     validate_mesh,
     vertex_normals,
 )
+
+
+def closest_point_on_triangles(
+    p: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray
+) -> np.ndarray:
+    """Reference: closest points on triangles (a, b, c) to points p, all (..., 3)
+    (Ericson, Real-Time Collision Detection, 5.1.5).
+
+    Parameters
+    ----------
+    p : (..., 3) float
+        The points, metres.
+    a, b, c : (..., 3) float
+        The triangles' corners, metres (broadcast against ``p``).
+
+    Returns
+    -------
+    (..., 3) float
+        The closest point of each triangle, metres.
+    """
+    ab, ac, ap = b - a, c - a, p - a
+    d1 = np.einsum("...i,...i", ab, ap)
+    d2 = np.einsum("...i,...i", ac, ap)
+    bp = p - b
+    d3 = np.einsum("...i,...i", ab, bp)
+    d4 = np.einsum("...i,...i", ac, bp)
+    cp = p - c
+    d5 = np.einsum("...i,...i", ab, cp)
+    d6 = np.einsum("...i,...i", ac, cp)
+    va = d3 * d6 - d5 * d4
+    vb = d5 * d2 - d1 * d6
+    vc = d1 * d4 - d3 * d2
+    with np.errstate(divide="ignore", invalid="ignore"):
+        denom = 1.0 / (va + vb + vc)
+        v_in = vb * denom
+        w_in = vc * denom
+        t_ab = d1 / (d1 - d3)
+        t_ac = d2 / (d2 - d6)
+        t_bc = (d4 - d3) / ((d4 - d3) + (d5 - d6))
+    out = a + ab * v_in[..., None] + ac * w_in[..., None]  # interior
+    # edges, then vertices (later assignments win, in Ericson's order reversed)
+    on_bc = (va <= 0) & (d4 - d3 >= 0) & (d5 - d6 >= 0)
+    out = np.where(on_bc[..., None], b + (c - b) * t_bc[..., None], out)
+    on_ac = (vb <= 0) & (d2 >= 0) & (d6 <= 0)
+    out = np.where(on_ac[..., None], a + ac * t_ac[..., None], out)
+    on_ab = (vc <= 0) & (d1 >= 0) & (d3 <= 0)
+    out = np.where(on_ab[..., None], a + ab * t_ab[..., None], out)
+    out = np.where(((d6 >= 0) & (d5 <= d6))[..., None], c, out)
+    out = np.where(((d3 >= 0) & (d4 <= d3))[..., None], b, out)
+    out = np.where(((d1 <= 0) & (d2 <= 0))[..., None], a, out)
+    return out
 
 
 @pytest.mark.parametrize("radius", [0.02, 0.035])

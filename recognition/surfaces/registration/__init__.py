@@ -16,6 +16,7 @@ One front door, :func:`register` (one model) / :func:`register_all` (several) /
 """
 
 from recognition.surfaces.registration.config import (
+    ALIGNED_SEARCH,
     THOROUGH_SEARCH,
     ClosedFormConfig,
     DataGeometryConfig,
@@ -32,6 +33,7 @@ from recognition.surfaces.registration.data import (
     data_fit_residual_m,
     data_geometry,
     data_noise_m,
+    outlier_threshold_m,
 )
 from recognition.surfaces.registration.dispatch import (
     CONFIGS,
@@ -42,7 +44,12 @@ from recognition.surfaces.registration.dispatch import (
     register_all,
     registration_mode,
 )
-from recognition.surfaces.registration.exact import exact_error_m, refine_exact, with_exact_error
+from recognition.surfaces.registration.exact import (
+    exact_error_m,
+    polish,
+    refine_exact,
+    with_exact_error,
+)
 from recognition.surfaces.registration.ranking import Recognition, rank
 from recognition.surfaces.registration.result import (
     ClosedFormRegistration,
@@ -52,6 +59,7 @@ from recognition.surfaces.registration.result import (
 )
 
 __all__ = [
+    "ALIGNED_SEARCH",
     "CONFIGS",
     "THOROUGH_SEARCH",
     "ClosedFormConfig",
@@ -75,6 +83,8 @@ __all__ = [
     "data_geometry",
     "data_noise_m",
     "exact_error_m",
+    "outlier_threshold_m",
+    "polish",
     "rank",
     "recognize",
     "refine_exact",

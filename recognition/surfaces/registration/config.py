@@ -11,6 +11,7 @@ import numpy as np
 from recognition.surfaces.registration.result import RegistrationMode
 
 __all__ = [
+    "ALIGNED_SEARCH",
     "THOROUGH_SEARCH",
     "ClosedFormConfig",
     "DataGeometryConfig",
@@ -111,14 +112,27 @@ class FastSearchConfig:
     final_iterations: int = 25
 
 
-#: The denser pass run when no model fits well enough (see FastConfig.fallback).
+#: The first denser pass run when no model fits well enough (see FastConfig.fallbacks):
+#: every vertex a candidate, phi near the alignment of the principal directions where
+#: both are clearly anisotropic.
+ALIGNED_SEARCH = FastSearchConfig(
+    tolerance_scale=float("inf"),
+    candidate_spacing_m=2.0e-3,
+    n_screened=384,
+    n_coarse=96,
+    n_final=8,
+)
+
+#: The last pass: every vertex, phi scanned all round (principal directions mislead on
+#: creases), more poses kept at each stage.
 THOROUGH_SEARCH = FastSearchConfig(
     tolerance_scale=float("inf"),
     candidate_spacing_m=2.0e-3,
     aligned_anisotropy=float("inf"),
-    n_screened=384,
-    n_coarse=96,
-    n_final=8,
+    prescreen_keep=0.3,
+    n_screened=1000,
+    n_coarse=150,
+    n_final=12,
 )
 
 
@@ -138,23 +152,27 @@ class FastConfig:
         (4.14).
     search : FastSearchConfig
         The first pass.
-    fallback : FastSearchConfig or None
-        A denser pass over the models not rejected at table lookup (by default over
-        their whole surface, since curvature estimates fail on sharp creases), run when
-        the best error of the first pass exceeds
-        :func:`~recognition.surfaces.registration.data.acceptable_error_m`; None: never.
+    fallbacks : tuple of FastSearchConfig
+        Denser passes over the models not rejected at table lookup (by default over
+        their whole surface, since curvature estimates fail on sharp creases), run in
+        turn while the best error so far exceeds what the data's noise explains
+        (:func:`~recognition.surfaces.registration.data.acceptable_error_m`); empty:
+        never.
     accept_sigmas, accept_floor_m
         A fit is good enough when its mean error is within ``accept_sigmas`` standard
-        deviations of the mean distance that the data's noise alone gives, plus
-        ``accept_floor_m``.
-    accept_noise_cap_m
-        The noise the acceptance test assumes is at most this. The noise is estimated
-        from the data's scatter about their sampling planes, which also counts a
-        sensor's error along the surface (a contact point displaced sideways, on a
-        surface that slopes across the sampling plane): it can be many times the error
-        across the surface, which alone sets the registration error. Above the cap the
-        fallback search runs, since the first pass also relies on the normal and
-        curvatures at p that such data give poorly.
+        deviations of the mean distance that the data's effective noise alone gives,
+        plus ``accept_floor_m``. The noise is measured across the surface
+        (:func:`~recognition.surfaces.registration.data.data_noise_m`), so that a
+        sensor's error along the surface does not make a poor fit acceptable.
+    model_mismatch_m : float
+        How far the object may differ from its model (a scan's error, wear), RMS metres;
+        it adds to the noise in the acceptance test and the outlier threshold.
+    outlier_sigmas, outlier_floor_m
+        A data point farther than ``outlier_sigmas`` effective noise levels (at least
+        ``outlier_floor_m``) from a model is an outlier on it: the registration error
+        (4.8) counts it at that threshold, the pose's last polish leaves it out, and the
+        registration reports it
+        (:func:`~recognition.surfaces.registration.data.outlier_threshold_m`).
     fit_noise_factor, fit_floor_m
         The curve fits at p are trusted when they explain each curve near p, and pass
         by p, to within ``fit_noise_factor`` times the data's noise plus ``fit_floor_m``
@@ -163,12 +181,14 @@ class FastConfig:
     prune_ratio : float or None
         A model whose best coarse RMS residual exceeds this multiple of the best
         model's stops before the final stage; None: never.
-    polish_ratio, polish_margin_m, polish_iterations
+    polish_ratio, polish_margin_m, polish_iterations, polish_poses
         Models whose distance-field error is within ``polish_ratio`` times the best plus
         ``polish_margin_m`` are polished on exact closest points (at most
         ``polish_iterations`` steps of
         :func:`~recognition.surfaces.registration.exact.refine_exact`) and get exact
-        errors.
+        errors; so are those of their first ``polish_poses`` distinct poses whose field
+        errors are within ``polish_margin_m`` of their best (the field cannot tell them
+        apart), the least exact error winning.
     """
 
     mode: ClassVar[RegistrationMode] = RegistrationMode.FAST
@@ -177,16 +197,19 @@ class FastConfig:
     relative_delta: float = 0.3
     geometry: DataGeometryConfig = field(default_factory=DataGeometryConfig)
     search: FastSearchConfig = field(default_factory=FastSearchConfig)
-    fallback: FastSearchConfig | None = THOROUGH_SEARCH
+    fallbacks: tuple[FastSearchConfig, ...] = (ALIGNED_SEARCH, THOROUGH_SEARCH)
     accept_sigmas: float = 4.0
     accept_floor_m: float = 5.0e-6
-    accept_noise_cap_m: float = 0.05e-3
+    model_mismatch_m: float = 0.0
+    outlier_sigmas: float = 5.0
+    outlier_floor_m: float = 0.1e-3
     fit_noise_factor: float = 5.0
     fit_floor_m: float = 5.0e-6
     prune_ratio: float | None = 4.0
     polish_ratio: float = 1.5
     polish_margin_m: float = 0.01e-3
     polish_iterations: int = 3
+    polish_poses: int = 4
 
 
 @dataclass(frozen=True)

@@ -11,12 +11,15 @@ and model are clearly anisotropic, a full scan elsewhere. Every (candidate, phi)
 every model is screened in one vectorised batch on the models' narrow-band signed
 distance fields with a few points per arm of the data; the best poses of each model slide
 into their basins by batched Gauss-Newton over all six degrees of freedom on ever more
-points, near-duplicates dropped between stages. A model whose coarse fit is far worse
-than the best model's stops there. The reported error is the mean point-to-surface
-distance (4.8), exact (closest points on the triangles, pose polished) for the models
-that can win. When even the best model fits worse than the data's own noise explains,
-the models not rejected at table lookup are searched again over their whole surface
-(:attr:`FastConfig.fallback`).
+points, near-duplicates dropped between stages; each stage's loss is a truncated
+quadratic, so that a gross outlier does not pull the pose. A model whose coarse fit is
+far worse than the best model's stops there. The reported error is the mean
+point-to-surface distance (4.8), each point counted at most the outlier threshold
+(:func:`~recognition.surfaces.registration.data.outlier_threshold_m`), exact (closest
+points on the triangles, pose polished) for the models that can win. When even the best
+model fits worse than the data's own noise explains, the models not rejected at table
+lookup are searched again over their whole surface, ever more densely
+(:attr:`FastConfig.fallbacks`).
 """
 
 from __future__ import annotations
@@ -39,8 +42,9 @@ from recognition.surfaces.registration.data import (
     acceptable_error_m,
     data_fit_residual_m,
     data_noise_m,
+    outlier_threshold_m,
 )
-from recognition.surfaces.registration.exact import with_exact_error
+from recognition.surfaces.registration.exact import polish
 from recognition.surfaces.registration.result import (
     Registration,
     RegistrationMode,
@@ -71,6 +75,11 @@ DISTINCT_RADIUS_M = 0.5e-3
 DISTINCT_ANGLE_RAD = float(np.deg2rad(3.0))
 
 
+#: With a clip, a start's points count at most this many robust standard deviations of
+#: its first residuals (and at least the clip).
+CLIP_SIGMAS = 4.0
+
+
 def _gauss_newton(
     stack: FieldStack,
     which: IntArray,
@@ -79,41 +88,52 @@ def _gauss_newton(
     t: Array,
     iterations: int,
     tolerance: float = 1e-4,
+    clip_m: float | None = None,
 ) -> tuple[Array, Array, Array, tuple[float, ...]]:
     """Batched Levenberg-damped Gauss-Newton of poses on signed distance fields.
 
     Minimises sum_i sdf(R q_i + t)^2 for each of the B starts in its own field
-    ``which`` (B,); R (B, 3, 3), t (B, 3), points (P, 3). A start stops once a step
-    lowers its cost by less than the fraction ``tolerance`` (or its damping exceeds
-    1e6); at most ``iterations`` steps. The rotation turns about the centroid of the
-    placed points. Returns R, t, the RMS residual per start and the best RMS after each
-    step.
+    ``which`` (B,); R (B, 3, 3), t (B, 3), points (P, 3). With ``clip_m`` the loss is a
+    truncated quadratic: a residual counts at most the larger of ``clip_m`` and
+    ``CLIP_SIGMAS`` robust standard deviations (1.4826 times the median absolute
+    residual) of the start's first residuals, and pulls the pose not at all beyond (an
+    outlier). A start stops once a step lowers its cost by less than the fraction
+    ``tolerance`` (or its damping exceeds 1e6); at most ``iterations`` steps. The
+    rotation turns about the centroid of the placed points. Returns R, t, the RMS
+    residual per start (clipped residuals at the clip) and the best RMS after each step.
     """
     pts_T = np.ascontiguousarray(points.T)
 
-    def evaluate(R: Array, t: Array, which: IntArray) -> State:
+    def evaluate(R: Array, t: Array, which: IntArray, clip: Array) -> State:
         X = (R @ pts_T).transpose(0, 2, 1) + t[:, None, :]
         r, g = stack.value_and_gradient(X, which)
-        return R, t, which, X, r, g
+        return R, t, which, X, r, g, clip
 
     def cost(state: State) -> Array:
-        r = state[4]
-        return np.mean(r * r, axis=1)
+        r, clip = state[4], state[6]
+        return np.mean(np.minimum(r * r, clip[:, None] ** 2), axis=1)
 
     def linearize(state: State) -> tuple[Array, Array]:
-        X, r, g = state[3], state[4], state[5]
+        X, r, g, clip = state[3], state[4], state[5], state[6]
         c = X.mean(axis=1)
-        return r, np.concatenate([cross(X - c[:, None, :], g), g], axis=-1)
+        J = np.concatenate([cross(X - c[:, None, :], g), g], axis=-1)
+        inlier = np.abs(r) <= clip[:, None]
+        return np.where(inlier, r, 0.0), np.where(inlier[..., None], J, 0.0)
 
     def retract(state: State, step: Array) -> State:
         R, t, which, X = state[:4]
         c = X.mean(axis=1)
         dR = rotation_from_vector(step[:, :3])
         t_new = (dR @ (t - c)[..., None])[..., 0] + c + step[:, 3:]
-        return evaluate(dR @ R, t_new, which)
+        return evaluate(dR @ R, t_new, which, state[6])
 
+    which = np.asarray(which)
+    state = evaluate(R, t, which, np.full(len(R), np.inf))
+    if clip_m is not None:
+        spread = CLIP_SIGMAS * 1.4826 * np.median(np.abs(state[4]), axis=1)
+        state = (*state[:6], np.maximum(spread, clip_m))
     result = damped_least_squares(
-        evaluate(R, t, np.asarray(which)),
+        state,
         cost=cost,
         linearize=linearize,
         retract=retract,
@@ -160,15 +180,23 @@ def _arm_indices(curves: DataCurves, point: Array, fractions: Sequence[float] | 
     """Indices into ``curves.points`` of the points at ``fractions`` of each arm's length.
 
     An arm runs from the point of a curve nearest p to one of its ends; the result holds,
-    per curve and fraction, the index on the forward arm then on the backward arm.
+    per curve and fraction, the index on the forward arm then on the backward arm. A curve
+    that p ends (a sweep truncated on one side) has one arm only: both samples of a
+    fraction f then lie on it, at f and f / 2.
     """
     idx, offset = [], 0
     for c in curves.curves:
         m = int(np.argmin(np.linalg.norm(c - point, axis=1)))
         n = len(c)
+        ahead, behind = n - 1 - m, m
         for f in fractions:
-            idx.append(offset + min(n - 1, m + max(1, round(f * (n - 1 - m)))))
-            idx.append(offset + max(0, m - max(1, round(f * m))))
+            if ahead == 0 or behind == 0:
+                arm, sign = (ahead, 1) if ahead > 0 else (behind, -1)
+                for g in (f, f / 2):
+                    idx.append(offset + m + sign * max(1, round(g * arm)))
+                continue
+            idx.append(offset + min(n - 1, m + max(1, round(f * ahead))))
+            idx.append(offset + max(0, m - max(1, round(f * behind))))
         offset += n
     return np.array(idx, dtype=np.int64)
 
@@ -298,10 +326,12 @@ def _search(
     config: FastConfig,
     search: FastSearchConfig,
     which_field: IntArray,
+    threshold_m: float,
 ) -> list[Registration]:
     """One pass of the fast search over ``models`` (fields ``which_field`` in ``stack``).
 
-    Returns one registration per model, its error read off the distance field.
+    Returns one registration per model, its error read off the distance field, each
+    point's distance counted at most ``threshold_m`` (beyond it the point is an outlier).
     """
     n = len(models)
     seconds = np.zeros(n)
@@ -312,7 +342,9 @@ def _search(
     coarse_idx = np.unique(_arm_indices(curves, geometry.point, fractions))
     screened = _screen(models, stack, which_field, curves, geometry, config, search, seconds)
 
-    def batched(poses: list[_Poses | None], stage_points: Array, steps: int) -> list[_Poses | None]:
+    def batched(
+        poses: list[_Poses | None], stage_points: Array, steps: int, clip_m: float | None = None
+    ) -> list[_Poses | None]:
         """Gauss-Newton of every model's poses in one batch; time shared by pose count."""
         live = [(w, p) for w, p in enumerate(poses) if p is not None]
         if not live:
@@ -326,6 +358,7 @@ def _search(
             np.concatenate([p.R for _, p in live]),
             np.concatenate([p.t for _, p in live]),
             steps,
+            clip_m=clip_m,
         )
         counts = np.bincount(owner, minlength=n)
         seconds[:] += (time.perf_counter() - start) * counts / counts.sum()
@@ -349,8 +382,12 @@ def _search(
             seconds[w] += time.perf_counter() - start
         return out
 
-    poses = batched([p for p, _ in screened], points[screen_idx], search.screen_iterations)
-    poses = batched(distinct(poses, search.n_coarse), points[coarse_idx], search.coarse_iterations)
+    poses = batched(
+        [p for p, _ in screened], points[screen_idx], search.screen_iterations, threshold_m
+    )
+    poses = batched(
+        distinct(poses, search.n_coarse), points[coarse_idx], search.coarse_iterations, threshold_m
+    )
     status = [RegistrationStatus.CONVERGED] * n
     coarse_rms = {w: float(p.rms.min()) for w, p in enumerate(poses) if p and p.rms is not None}
     if config.prune_ratio is not None and coarse_rms:
@@ -361,41 +398,61 @@ def _search(
     final = [
         p if s is RegistrationStatus.CONVERGED else None for p, s in zip(poses, status, strict=True)
     ]
-    final = batched(distinct(final, search.n_final), points, search.final_iterations)
+    final = batched(distinct(final, search.n_final), points, search.final_iterations, threshold_m)
+    # the best n_final poses of every model (a pruned model's coarse ones) scored in one
+    # batch, the least RMS residual first
+    ranked: dict[int, tuple[Array, Array]] = {}
+    for w in range(n):
+        source = final[w] if final[w] is not None else poses[w]
+        if source is not None and source.rms is not None:
+            order = np.argsort(source.rms, kind="stable")[: search.n_final]
+            ranked[w] = (source.R[order], source.t[order])
+    start = time.perf_counter()
+    live = list(ranked)
+    R_all = np.concatenate([ranked[w][0] for w in live] or [np.zeros((0, 3, 3))])
+    t_all = np.concatenate([ranked[w][1] for w in live] or [np.zeros((0, 3))])
+    counts = np.array([len(ranked[w][0]) for w in live], dtype=np.int64)
+    fields = np.repeat(which_field[live], counts) if live else np.zeros(0, np.int64)
+    distances = _field_distances(stack, fields, points, R_all, t_all)
+    bounds = np.cumsum(counts)
+    scored = {w: np.arange(b - c, b) for w, b, c in zip(live, bounds, counts, strict=True)}
+    seconds_per_pose = (time.perf_counter() - start) / max(int(bounds[-1]) if live else 0, 1)
     out = []
     for w, model in enumerate(models):
         candidates = screened[w][1]
-        source = final[w] if final[w] is not None else poses[w]
-        if source is None or source.rms is None:
+        if w not in scored:
             out.append(rejected(model.name, RegistrationMode.FAST, 0.0, candidates, seconds[w]))
             continue
-        start = time.perf_counter()
-        b = int(np.argmin(source.rms))
-        R, t = source.R[b], source.t[b]
-        error = float(_field_errors(stack, which_field[[w]], points, R[None], t[None])[0])
+        rows = scored[w]
+        errors = np.mean(np.minimum(distances[rows], threshold_m), axis=1)
+        found = pose_matrix(R_all[rows], t_all[rows])
         out.append(
             Registration(
                 model.name,
-                error,
-                pose_matrix(R, t),
-                R @ geometry.point + t,
+                float(errors[0]),
+                found[0],
+                found[0, :3, :3] @ geometry.point + found[0, :3, 3],
                 candidates,
                 int(iterations[w]),
                 status[w],
-                seconds[w] + time.perf_counter() - start,
+                seconds[w] + seconds_per_pose * len(rows),
                 RegistrationMode.FAST,
                 error_is_exact=False,
+                outliers=np.flatnonzero(distances[rows[0]] > threshold_m),
+                outlier_threshold_m=threshold_m,
+                poses=found,
+                pose_errors_m=errors,
             )
         )
     return out
 
 
-def _field_errors(
+def _field_distances(
     stack: FieldStack, which_field: IntArray, points: Array, R: Array, t: Array
 ) -> Array:
-    """Mean |sdf| of the data points at poses R (B, 3, 3), t (B, 3) in fields (B,)."""
+    """|sdf| (B, P) of the data points at poses R (B, 3, 3), t (B, 3) in fields (B,)."""
     X = (R @ points.T).transpose(0, 2, 1) + t[:, None, :]
-    return np.mean(np.abs(stack(X, which_field)), axis=1)
+    return np.abs(stack(X, which_field))
 
 
 def register_fast(
@@ -422,57 +479,63 @@ def register_fast(
     which_field : (len(models),) int, optional
         Index of each model's field in ``stack`` (default: 0, 1, ...).
     noise_m : float, optional
-        The data's noise (default :func:`data_noise_m`), for the fallback test.
+        The data's noise across the surface (default :func:`data_noise_m`), for the
+        fallback test and the outlier threshold.
 
     Returns
     -------
     list of Registration
         One per model, in order. Errors are exact (poses polished on closest points) for
-        the models that can win; the others are read off the distance fields.
+        the models that can win; the others are read off the distance fields. Either way
+        a point counts at most the outlier threshold
+        (:func:`~recognition.surfaces.registration.data.outlier_threshold_m`).
     """
     models = list(models)
     if stack is None:
         stack = FieldStack.of([m.distance_field for m in models])
     which_field = np.arange(len(models)) if which_field is None else np.asarray(which_field)
     noise = data_noise_m(curves) if noise_m is None else noise_m
+    threshold = outlier_threshold_m(noise, config)
     trusted = data_fit_residual_m(curves, config.geometry, geometry.point) <= (
         config.fit_noise_factor * noise + config.fit_floor_m
     )
     search = config.search
     if not trusted:
         search = replace(search, tolerance_scale=np.inf, aligned_anisotropy=np.inf)
-    first = _search(models, stack, curves, geometry, config, search, which_field)
-    registrations = _polish(models, curves, geometry, first, config)
-    if config.fallback is None:
-        return registrations
-    if min(r.error_m for r in registrations) <= acceptable_error_m(
-        noise, len(curves.points), config
-    ):
-        return registrations
-    # models rejected at table lookup stay rejected: the fallback searches the others
-    kept = [
-        w for w, r in enumerate(registrations) if r.status is not RegistrationStatus.NO_CANDIDATES
-    ]
-    second = _search(
-        [models[w] for w in kept],
-        stack,
-        curves,
-        geometry,
-        config,
-        config.fallback,
-        which_field[kept],
-    )
-    merged = list(registrations)
-    for w, b in zip(kept, second, strict=True):
-        a = registrations[w]
-        better = b if b.error_m < a.error_m else a
-        merged[w] = replace(
-            better,
-            candidates=np.union1d(a.candidates, b.candidates),
-            iterations=a.iterations + b.iterations,
-            time_s=a.time_s + b.time_s,
+    first = _search(models, stack, curves, geometry, config, search, which_field, threshold)
+    registrations = _polish(models, curves, geometry, first, config, threshold)
+    acceptable = acceptable_error_m(noise, len(curves.points), config)
+    for fallback in config.fallbacks:
+        if min(r.error_m for r in registrations) <= acceptable:
+            break
+        # models rejected at table lookup stay rejected: the fallback searches the others
+        kept = [
+            w
+            for w, r in enumerate(registrations)
+            if r.status is not RegistrationStatus.NO_CANDIDATES
+        ]
+        found = _search(
+            [models[w] for w in kept],
+            stack,
+            curves,
+            geometry,
+            config,
+            fallback,
+            which_field[kept],
+            threshold,
         )
-    return _polish(models, curves, geometry, merged, config)
+        merged = list(registrations)
+        for w, b in zip(kept, found, strict=True):
+            a = registrations[w]
+            better = b if b.error_m < a.error_m else a
+            merged[w] = replace(
+                better,
+                candidates=np.union1d(a.candidates, b.candidates),
+                iterations=a.iterations + b.iterations,
+                time_s=a.time_s + b.time_s,
+            )
+        registrations = _polish(models, curves, geometry, merged, config, threshold)
+    return registrations
 
 
 def _polish(
@@ -481,18 +544,36 @@ def _polish(
     geometry: LocalSurfaceGeometry,
     registrations: Sequence[Registration],
     config: FastConfig,
+    threshold_m: float,
 ) -> list[Registration]:
-    """Exact errors, poses polished on closest points, for the models that can win."""
-    field_errors = [r.error_m for r in registrations if not r.error_is_exact]
-    exact_errors = [r.error_m for r in registrations if r.error_is_exact]
-    best = min(field_errors + exact_errors, default=float("inf"))
+    """Exact errors, poses polished on closest points (outliers beyond ``threshold_m``
+    left out), for the models that can win.
+
+    A model is polished when its distance-field error is within ``polish_ratio`` times
+    the best plus ``polish_margin_m``. So are those of its first ``polish_poses`` distinct
+    poses whose field errors are within ``polish_margin_m`` of its best (the distance
+    field cannot tell them apart: a pose second on the field may be first on the
+    triangles). The least exact error is the registration's.
+    """
+    errors = [r.error_m for r in registrations]
+    best = min(errors, default=float("inf"))
     if not np.isfinite(best):
         return list(registrations)
     limit = config.polish_ratio * best + config.polish_margin_m
     out = list(registrations)
     for w, reg in enumerate(registrations):
-        if not reg.error_is_exact and reg.error_m <= limit:
-            out[w] = with_exact_error(
-                reg, models[w], curves, True, geometry.point, config.polish_iterations
-            )
+        if reg.error_is_exact or reg.error_m > limit:
+            continue
+        close = reg.pose_errors_m[: config.polish_poses]
+        within = np.cumprod(close <= min(limit, reg.error_m + config.polish_margin_m))
+        count = max(1, int(within.sum()))  # poses come best first
+        out[w] = polish(
+            reg,
+            models[w],
+            curves,
+            point=geometry.point,
+            iterations=config.polish_iterations,
+            threshold_m=threshold_m,
+            poses=reg.poses[:count] if len(reg.poses) else None,
+        )
     return out

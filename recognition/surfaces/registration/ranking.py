@@ -58,6 +58,15 @@ class Recognition:
         return self.registrations.get(self.ranking[0][0]) if self.ranking else None
 
     @property
+    def outliers(self) -> NDArray[np.int64]:
+        """Indices (into the curves' points) of the data points the best model's
+        registration rejected as outliers (empty when no model was named)."""
+        best = self.best
+        if self.name is None or best is None:
+            return np.zeros(0, np.int64)
+        return best.outliers
+
+    @property
     def decided_at_lookup(self) -> bool:
         """True when every other model was rejected at table lookup (4.7)."""
         return self.name is not None and all(

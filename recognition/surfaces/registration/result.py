@@ -76,6 +76,18 @@ class Registration:
         False when ``error_m`` was read off a distance field (within about 0.01 mm of
         the exact distance), see
         :func:`~recognition.surfaces.registration.exact.with_exact_error`.
+    outliers : (k,) int
+        Indices (into ``curves.points``) of the data points farther than
+        ``outlier_threshold_m`` from the model at the pose: counted at the threshold in
+        ``error_m`` (fast mode), and left out of the pose's last polish.
+    outlier_threshold_m : float
+        The outlier threshold, metres (``inf``: none).
+    poses : (k, 4, 4) float
+        Fast mode: the best distinct poses the search ended with on this model (at most
+        its last pass's ``n_final``; the registration's own first), T_model_from_data
+        each.
+    pose_errors_m : (k,) float
+        Their errors (4.8), metres, exact where ``error_is_exact``.
     """
 
     model: str
@@ -89,6 +101,10 @@ class Registration:
     mode: RegistrationMode
     trace: tuple[float, ...] = field(default_factory=tuple)
     error_is_exact: bool = True
+    outliers: NDArray[np.int64] = field(default_factory=lambda: np.zeros(0, np.int64))
+    outlier_threshold_m: float = float("inf")
+    poses: NDArray[np.float64] = field(default_factory=lambda: np.zeros((0, 4, 4)))
+    pose_errors_m: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0))
 
     @property
     def rejected(self) -> bool:
