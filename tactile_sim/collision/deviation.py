@@ -10,6 +10,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy.spatial import ConvexHull
 
+from recognition.surfaces.distance import MeshDistance
 from tactile_sim.collision.hulls import mesh_arrays
 
 __all__ = [
@@ -65,8 +66,6 @@ def hull_surface_deviation(
     seed : int
         Sampling seed.
     """
-    import igl
-
     rng = np.random.default_rng(seed)
     hulls = []
     for vertices, _ in parts:
@@ -94,11 +93,7 @@ def hull_surface_deviation(
                 inside |= np.all(offsets < _SHARED_FACE_TOLERANCE_M, axis=1)
         exposed.append(points[~inside])
     points = np.concatenate(exposed)
-    vertices, faces = mesh_arrays(mesh)
-    tree = igl.AABB()
-    tree.init(vertices, faces)
-    squared, _, _ = tree.squared_distance(vertices, faces, points)
-    distance = np.sqrt(squared)
+    distance = MeshDistance(*mesh_arrays(mesh)).closest(points)[0]
     return HullAccuracy(
         n_samples=len(points),
         mean_m=float(distance.mean()),

@@ -1,7 +1,8 @@
 """The compiled probing scene with one object, and queries on the object's original mesh.
 
-The experimenter's plan and the ground truth query the mesh (closest points, first ray
-hits, face normals) with libigl AABB trees, built on first use; the sensor never does.
+The experimenter's plan, the tip's contact and the ground truth query the mesh (closest
+points, first ray hits, face normals) with libigl AABB trees, built on first use; the
+sensor never does.
 """
 
 from __future__ import annotations
@@ -15,7 +16,9 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from recognition.rigid import apply_pose
+from recognition.surfaces.distance import MeshDistance
 from tactile_sim import scene
+from tactile_sim.objects.visual import visual_mesh
 from tactile_sim.probing.placement import (
     MOUNT_IN_WORLD,
     ObjectLike,
@@ -54,22 +57,17 @@ class ProbeScene:
     T_world_from_object: NDArray[np.float64]
     build_seconds: float
     tip_contact: bool = True
-    _tree: Any = field(default=None, repr=False)
+    _mesh_distance: MeshDistance | None = field(default=None, repr=False)
     _ray_tree: Any = field(default=None, repr=False)
     _face_normals: Any = field(default=None, repr=False)
 
-    def mesh_tree(self) -> tuple[Any, NDArray[np.float64], NDArray[np.int64]]:
-        """Returns a libigl AABB tree of the original mesh (model frame), its vertices (n, 3)
-        metres and faces (m, 3), built on first use."""
-        if self._tree is None:
-            import igl
-
-            vertices = np.ascontiguousarray(self.target.mesh.vertices, dtype=np.float64)
-            faces = np.ascontiguousarray(self.target.mesh.faces, dtype=np.int64)
-            tree = igl.AABB()
-            tree.init(vertices, faces)
-            self._tree = (tree, vertices, faces)
-        return self._tree
+    @property
+    def mesh_distance(self) -> MeshDistance:
+        """Exact closest points on the original mesh (model frame; libigl AABB tree built on
+        first use)."""
+        if self._mesh_distance is None:
+            self._mesh_distance = MeshDistance(self.target.mesh.vertices, self.target.mesh.faces)
+        return self._mesh_distance
 
     def face_normals_in_world(self) -> NDArray[np.float64]:
         """Returns the original mesh's unit face normals in the world frame, (m, 3)."""
@@ -90,7 +88,7 @@ class ProbeScene:
         if self._ray_tree is None:
             import igl
 
-            _, vertices, faces = self.mesh_tree()
+            vertices, faces = self.mesh_distance.vertices, self.mesh_distance.faces
             vertices_mm = vertices * 1e3
             tree = igl.AABB()
             tree.init(vertices_mm, faces)
@@ -103,18 +101,59 @@ class ProbeScene:
         )
         return np.asarray(hit_faces, dtype=np.int64), np.asarray(distance_mm) * 1e-3
 
+    def sphere_rests_in_world(
+        self, starts_in_world: ArrayLike, radius_m: float, floor_z_m: float = 0.0
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.bool_]]:
+        """Returns where a sphere of radius ``radius_m`` lowered vertically from each start
+        (k, 3) first touches the original mesh: its centre (k, 3) and the unit contact
+        normal (k, 3), world frame, and whether it touched before its centre came down to
+        ``floor_z_m + radius_m`` (the table). Sphere tracing on exact distances: every
+        step lowers the sphere by its clearance, so it never passes through the surface;
+        it starts two radii above where a vertical ray from the start meets the mesh, if
+        it is clear of the mesh there, else at the start (which must be clear).
+        """
+        centres = np.array(starts_in_world, dtype=np.float64).reshape(-1, 3)
+        lowest = floor_z_m + radius_m
+        T = self.T_world_from_object
+        down = np.tile(T[:3, :3].T @ [0.0, 0.0, -1.0], (len(centres), 1))
+        hit_faces, hit_t = self.first_hits_in_object((centres - T[:3, 3]) @ T[:3, :3], down)
+        # start two radii above the ray's hit where the sphere is clear of the mesh there
+        # (every point between the start and the hit is outside; on slopes steeper than
+        # 60 degrees the sphere would cut the surface there: start from the start)
+        hit = np.flatnonzero(hit_faces >= 0)
+        lower = centres[hit].copy()
+        lower[:, 2] = np.minimum(lower[:, 2], lower[:, 2] - hit_t[hit] + 2 * radius_m)
+        clear = self.closest_points_in_world(lower)[1] >= radius_m
+        centres[hit[clear]] = lower[clear]
+        active = np.ones(len(centres), bool)
+        closest = np.zeros_like(centres)
+        for _ in range(200):
+            if not active.any():
+                break
+            q, d = self.closest_points_in_world(centres[active])
+            closest[active] = q
+            clearance = d - radius_m
+            done = clearance < 1e-6
+            rows = np.flatnonzero(active)
+            centres[rows[~done], 2] -= clearance[~done]
+            low = centres[rows, 2] <= lowest
+            centres[rows[low], 2] = lowest
+            active[rows[done | low]] = False
+        normals = centres - closest
+        normals /= np.maximum(np.linalg.norm(normals, axis=1, keepdims=True), 1e-12)
+        touched = centres[:, 2] > lowest + 1e-9
+        return centres, normals, touched
+
     def closest_points_in_world(
         self, points_in_world: ArrayLike
     ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Returns the closest points of the original mesh (world frame) and their
         distances (metres) for (k, 3) world points; libigl AABB, exact point-triangle
         distances."""
-        tree, vertices, faces = self.mesh_tree()
         T = self.T_world_from_object
         points = np.asarray(points_in_world, dtype=np.float64).reshape(-1, 3)
-        in_object = (points - T[:3, 3]) @ T[:3, :3]
-        squared, _, closest = tree.squared_distance(vertices, faces, in_object)
-        return apply_pose(T, closest), np.sqrt(squared)
+        distance, closest, _ = self.mesh_distance.closest((points - T[:3, 3]) @ T[:3, :3])
+        return apply_pose(T, closest), distance
 
 
 def build_probe_scene(
@@ -156,7 +195,7 @@ def build_probe_scene(
         model,
         _mjcf_name(target.name),
         [(v, f) for v, f in target.parts.parts],
-        visual_mesh=target.mesh,
+        visual_mesh=visual_mesh(target.mesh),
         position_in_mount=T[:3, 3] - MOUNT_IN_WORLD,
         quat_wxyz_in_mount=quat,
         tip_collides=not tip_contact,

@@ -27,10 +27,13 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
+from recognition.rigid import cross
 from tactile_sim import scene
 from tactile_sim.probing.probe_scene import ProbeScene
 
 __all__ = ["TipContact", "TipContactConfig"]
+
+_X_AXIS, _Y_AXIS = np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0])
 
 Step = Callable[..., None]
 """Steps a simulation: ``step(model, data)`` or ``step(model, data, nstep)``."""
@@ -71,8 +74,7 @@ class TipContact:
     def __init__(self, probe_scene: ProbeScene, config: TipContactConfig | None = None) -> None:
         physics = probe_scene.physics
         self.config = config or TipContactConfig()
-        self._tree, self._vertices, self._faces = probe_scene.mesh_tree()
-        self._face_normals = np.ascontiguousarray(probe_scene.target.mesh.face_normals)
+        self._mesh = probe_scene.mesh_distance
         T = probe_scene.T_world_from_object
         self._R, self._t = T[:3, :3].copy(), T[:3, 3].copy()
         self._site = int(physics.model.name2id(scene.PROBE_TIP_SITE, "site"))
@@ -105,20 +107,17 @@ class TipContact:
     def _query(self, data: mujoco.MjData, c: NDArray[np.float64]) -> None:
         self.queries += 1
         c_object = (c - self._t) @ self._R
-        squared, face, nearest = self._tree.squared_distance(
-            self._vertices, self._faces, c_object[None]
-        )
-        q, f = nearest[0], int(face[0])
-        distance = math.sqrt(float(squared[0]))
-        face_normal = self._face_normals[f]
+        distances, nearest, face = self._mesh.closest(c_object[None])
+        q, distance = nearest[0], float(distances[0])
+        face_normal = self._mesh.face_normals[int(face[0])]
         n = (c_object - q) / distance if distance > 1e-12 else face_normal
         if n @ face_normal < 0:  # the centre is under the surface: push it out
             n = face_normal
         n_world = self._R @ n
-        helper = np.array([1.0, 0.0, 0.0]) if abs(n_world[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
-        x = np.cross(helper, n_world)
-        x /= np.linalg.norm(x)
-        frame = np.column_stack([x, np.cross(n_world, x), n_world])
+        helper = _X_AXIS if abs(n_world[0]) < 0.9 else _Y_AXIS
+        x = cross(helper, n_world)
+        x /= math.sqrt(float(x @ x))
+        frame = np.column_stack([x, cross(n_world, x), n_world])
         quat = np.empty(4)
         mujoco.mju_mat2Quat(quat, frame.reshape(9))
         data.mocap_pos[self._mocap] = self._R @ q + self._t - self._half_thickness * n_world

@@ -434,3 +434,19 @@ def test_render_script_writes_pngs(catalog: dict[str, ObjectModel], tmp_path: Pa
     written = module.run(config)
     assert [p.name for p in written] == ["stone.png", "pear.png", "contact_sheet.png"]
     assert all(p.stat().st_size > 1000 for p in written)
+
+
+def test_the_drawn_copy_is_simplified_once_and_cached(tmp_assets: Path) -> None:
+    from tactile_sim.objects.visual import visual_mesh
+
+    tmp_path = tmp_assets
+    mesh = trimesh.creation.icosphere(subdivisions=6, radius=0.03)  # 81920 faces
+    drawn = visual_mesh(mesh, max_faces=5000)
+    assert 4000 < len(drawn.faces) <= 5000
+    np.testing.assert_allclose(drawn.bounds, mesh.bounds, atol=0.3e-3)
+    (cached,) = (tmp_path / "visual").glob("*.npz")
+    again = visual_mesh(mesh, max_faces=5000)
+    np.testing.assert_array_equal(again.faces, drawn.faces)
+    assert cached.stat().st_mtime_ns == next((tmp_path / "visual").glob("*.npz")).stat().st_mtime_ns
+    small = trimesh.creation.icosphere(subdivisions=2)
+    assert visual_mesh(small, max_faces=5000) is small

@@ -34,3 +34,35 @@ def test_given_point_is_snapped_to_the_model_and_probed(sphere_scene: ProbeScene
 def test_point_on_the_underside_is_rejected(sphere_scene: ProbeScene) -> None:
     with pytest.raises(ValueError, match="upward-facing"):
         probe_object("sphere", seed=1, point=(0.0, 0.0, -0.01), probe_scene=sphere_scene)
+
+
+def test_a_lowered_sphere_rests_where_it_first_touches(sphere_scene: ProbeScene) -> None:
+    """Over the 33 mm sphere (resting on the table, its centre 33 mm up): the tip's centre
+    comes to rest at R + r from the sphere's centre, its contact normal radial (to the
+    facets, within 2 degrees); beyond the sphere it reaches the table."""
+    r, R = 1e-3, 0.033
+    x = np.array([0.0, 5e-3, 20e-3, 30e-3, 33.5e-3, 40e-3])
+    starts = np.column_stack([0.40 + x, np.zeros_like(x), np.full_like(x, 0.08)])
+    centres, normals, touched = sphere_scene.sphere_rests_in_world(starts, r)
+    on = x < R + r
+    np.testing.assert_array_equal(touched, on)
+    height = R + np.sqrt((R + r) ** 2 - x[on] ** 2)
+    np.testing.assert_allclose(centres[on, 2], height, atol=0.05e-3)
+    radial = (centres[on] - [0.40, 0.0, R]) / (R + r)
+    assert np.all(np.einsum("ij,ij->i", normals[on], radial) > math.cos(math.radians(2)))
+    np.testing.assert_allclose(centres[~on, 2], r)
+
+
+def test_sweeps_fit_counts_the_contacts_a_sweep_can_take(sphere_scene: ProbeScene) -> None:
+    from tactile_sim.probing.plan import sweeps_fit
+
+    top = np.array([0.40, 0.0, 0.066])
+    yaws = np.radians([0.0, 60.0, 120.0])
+    assert sweeps_fit(sphere_scene, top, yaws, 10e-3, 60.0) == 1.0
+    # out to 31.8 mm each side, 0.6 mm apart: the contact normal tilts beyond 60 degrees
+    # past 0.866 (R + r) = 29.0 mm from the top, at 2 x 5 of the 107 points of a sweep
+    fit = sweeps_fit(sphere_scene, top, yaws, 31.8e-3, 60.0)
+    offsets = np.arange(-31.8e-3, 31.8e-3 + 1e-9, 0.6e-3)
+    expected = np.mean(np.abs(offsets) < math.sin(math.radians(60)) * 0.034)
+    assert fit == pytest.approx(expected, abs=1.5 / len(offsets))
+    assert fit < 1.0
