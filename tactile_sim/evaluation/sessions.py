@@ -19,8 +19,11 @@ import numpy as np
 
 from recognition import DataCurves
 from recognition.evaluation import Instance, InstanceSpec
+from recognition.rigid import apply_pose
+from recognition.surfaces.registration import common_point
 from tactile_sim.collision import solid_names
 from tactile_sim.errors import SimulationError, UnknownObject
+from tactile_sim.evaluation.mesh_distances import mesh_distances_m
 from tactile_sim.objects import object_names
 from tactile_sim.probing import ProbingConfig, probe_object
 from tactile_sim.sensor import SensorConfig
@@ -112,10 +115,16 @@ class SimulatedSource:
         """Probes the spec's object with the spec's seed; returns a benchmark instance.
 
         The instance's ``info`` holds the session's facts: probing wall and simulated
-        time, points per curve, truncated sweep sides, the sensed points' distance to
-        the true contact points (mean and max, mm) and their spacing. A session that
-        fails (a sweep left with too few points, an unreachable point, an unstable
+        time, points per curve, truncated sweep sides, the errors of the points (mean
+        and max, mm: the sensed points from the true contact points, where MuJoCo's
+        contact met the surface the tip touched; the true contact points from the
+        object's mesh; the sensed points from the mesh) and their spacing. A session
+        that fails (a sweep left with too few points, an unreachable point, an unstable
         simulation) gives an instance without curves whose ``info["error"]`` says why.
+
+        The instance's true point is where the data's common point p (the point the
+        recogniser locates, :func:`recognition.surfaces.registration.common_point`) lies
+        on the object, by the object's true pose.
         """
         try:
             session = probe_object(
@@ -142,6 +151,13 @@ class SimulatedSource:
                 for s in session.sweeps
             ]
         )
+        T_object_from_world = np.linalg.inv(truth.T_world_from_object)
+        contact_error = mesh_distances_m(
+            spec.model, apply_pose(T_object_from_world, true_curves.points)
+        )
+        sensed_off_mesh = mesh_distances_m(
+            spec.model, apply_pose(T_object_from_world, session.curves.points)
+        )
         steps = np.concatenate(
             [np.linalg.norm(np.diff(s.points_in_world, axis=0), axis=1) for s in session.sweeps]
         )
@@ -153,6 +169,10 @@ class SimulatedSource:
             "sim_time_s": session.sim_seconds,
             "sensed_error_mean_mm": float(sensed_error.mean() * 1e3),
             "sensed_error_max_mm": float(sensed_error.max() * 1e3),
+            "contact_vs_mesh_mean_mm": float(contact_error.mean() * 1e3),
+            "contact_vs_mesh_max_mm": float(contact_error.max() * 1e3),
+            "sensed_vs_mesh_mean_mm": float(sensed_off_mesh.mean() * 1e3),
+            "sensed_vs_mesh_max_mm": float(sensed_off_mesh.max() * 1e3),
             "spacing_mean_mm": float(steps.mean() * 1e3),
             "spacing_std_mm": float(steps.std() * 1e3),
         }
@@ -160,7 +180,8 @@ class SimulatedSource:
             curves, reference = session.curves, true_curves
         else:
             curves, reference = true_curves, session.curves
-        return Instance(curves, np.asarray(truth.point_in_object), info, reference)
+        point = apply_pose(T_object_from_world, common_point(curves)[None])[0]
+        return Instance(curves, point, info, reference)
 
 
 def catalog_experiment(**overrides: Any) -> SimulatedSource:

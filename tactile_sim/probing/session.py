@@ -57,7 +57,10 @@ class GroundTruth:
     normal_in_object : (3,) float
         The model's outward normal at p, model frame.
     true_contact_points_in_world : tuple of (n_i, 3) float
-        Per curve, closest points of the original mesh to the true tip centres.
+        Per curve, where MuJoCo's contact met the surface the tip touched at each
+        reading.
+    mesh_points_in_world : tuple of (n_i, 3) float
+        Per curve, the points of the object's mesh nearest the true tip centres.
     true_tip_centres_in_world : tuple of (n_i, 3) float
         Per curve, the simulator's tip centres at the readings.
     """
@@ -67,6 +70,7 @@ class GroundTruth:
     point_in_world: NDArray[np.float64]
     normal_in_object: NDArray[np.float64]
     true_contact_points_in_world: tuple[NDArray[np.float64], ...]
+    mesh_points_in_world: tuple[NDArray[np.float64], ...]
     true_tip_centres_in_world: tuple[NDArray[np.float64], ...]
 
 
@@ -79,7 +83,7 @@ class ProbeSession:
     object_name : str
     curves : DataCurves
         The three sensed curves, world frame, with ``approach`` the direction in which
-        the probe approached p (into the object).
+        the probe approached p (into the object) and the sensed contact normals.
     sweeps : tuple of SweepResult
         Per-sweep details (planes, normals, truncations).
     ground_truth : GroundTruth
@@ -262,7 +266,9 @@ def probe_object(
             f"{MIN_CURVE_POINTS} points{tried}: {reasons}"
         )
     curves = DataCurves(
-        curves=tuple(s.points_in_world for s in sweeps), approach=np.array([0.0, 0.0, -1.0])
+        curves=tuple(s.points_in_world for s in sweeps),
+        approach=np.array([0.0, 0.0, -1.0]),
+        normals=tuple(s.normals_in_world for s in sweeps),
     )
     T_object_from_world = np.linalg.inv(T)
     truth = GroundTruth(
@@ -271,6 +277,7 @@ def probe_object(
         point_in_world=p_world,
         normal_in_object=T_object_from_world[:3, :3] @ normal_world,
         true_contact_points_in_world=tuple(s.true_contact_points_in_world for s in sweeps),
+        mesh_points_in_world=tuple(s.mesh_points_in_world for s in sweeps),
         true_tip_centres_in_world=tuple(s.true_tip_centres_in_world for s in sweeps),
     )
     return ProbeSession(

@@ -101,10 +101,11 @@ class SweepResult:
     true_tip_centres_in_world : (n, 3) float, metres
         Ground truth: the simulator's tip centres at the readings.
     true_contact_points_in_world : (n, 3) float, metres
-        Ground truth: closest points of the original mesh to the true tip centres.
-    simulated_contact_points_in_world : (n, 3) float, metres
         Ground truth: where MuJoCo's contact met the surface the tip touched (the
-        collider) at each reading; NaN where it touched nothing.
+        collider) at each reading (the nearest mesh point where a reading caught the
+        stiff contact off for a timestep).
+    mesh_points_in_world : (n, 3) float, metres
+        Ground truth: the points of the object's mesh nearest the true tip centres.
     stylus_contacts : (n,) int
         Ground truth: contacts of the shaft or housing at each reading (should be 0).
     reading_times_s : (n,) float, seconds
@@ -119,7 +120,7 @@ class SweepResult:
     sides: tuple[SweepSide, ...]
     true_tip_centres_in_world: NDArray[np.float64]
     true_contact_points_in_world: NDArray[np.float64]
-    simulated_contact_points_in_world: NDArray[np.float64]
+    mesh_points_in_world: NDArray[np.float64]
     stylus_contacts: NDArray[np.int64]
     reading_times_s: NDArray[np.float64] = field(default_factory=lambda: np.empty(0))
 
@@ -323,6 +324,15 @@ class SweepRunner:
         self.rig.settle(self.config.settle_s)
 
 
+def _touched_or_nearest(samples: list[Sample], nearest: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Where MuJoCo's contact met the touched surface at each reading; at a reading that
+    caught the stiff contact off for a timestep, the mesh point nearest the tip centre."""
+    touched = np.array([s.touched for s in samples]).reshape(-1, 3)
+    missing = ~np.all(np.isfinite(touched), axis=1)
+    touched[missing] = nearest[missing]
+    return touched
+
+
 def sweep_result(
     probe_scene: ProbeScene,
     plane: SamplingPlane,
@@ -338,7 +348,7 @@ def sweep_result(
         centres, np.array([s.estimate.normal_in_world for s in samples]), sensor
     )
     true_tips = np.array([s.true_tip for s in samples])
-    true_contacts, _ = probe_scene.closest_points_in_world(true_tips)
+    nearest, _ = probe_scene.closest_points_in_world(true_tips)
     return SweepResult(
         plane=plane,
         points_in_world=points,
@@ -347,8 +357,8 @@ def sweep_result(
         p_index=p_index,
         sides=tuple(sides),
         true_tip_centres_in_world=true_tips,
-        true_contact_points_in_world=true_contacts,
-        simulated_contact_points_in_world=np.array([s.touched for s in samples]).reshape(-1, 3),
+        true_contact_points_in_world=_touched_or_nearest(samples, nearest),
+        mesh_points_in_world=nearest,
         stylus_contacts=np.array([s.stylus_contacts for s in samples], dtype=np.int64),
         reading_times_s=np.array([s.estimate.reading.time_s for s in samples]),
     )

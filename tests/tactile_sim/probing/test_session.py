@@ -42,6 +42,20 @@ def test_session_on_the_sphere(sphere_scene: ProbeScene) -> None:
         # (friction leaves up to tip radius x sin(friction angle) = 0.1 mm along the
         # surface where the tip barely slid).
         assert error.mean() < 0.04e-3 and error.max() < 0.15e-3
+        # MuJoCo's contacts lie on the mesh where the tip touched it (the tip's contact
+        # box is tangent to the mesh there), and next to the mesh points nearest the tips.
+        touched = sweep.true_contact_points_in_world
+        _, off_mesh = sphere_scene.closest_points_in_world(touched)
+        assert off_mesh.max() < 2e-6
+        gap = np.linalg.norm(touched - sweep.mesh_points_in_world, axis=1)
+        assert gap.max() < 20e-6
+        # The sensed normals (the joystick's deflection: a few degrees off where the
+        # sweep sets off or turns) travel with the curves.
+        outward = (sweep.points_in_world - centre) / 0.033
+        off = np.degrees(np.arccos(np.einsum("ij,ij->i", sweep.normals_in_world, outward)))
+        assert np.median(off) < 1.5 and off.max() < 8.0
+    for curve_normals, sweep in zip(session.curves.normals, session.sweeps, strict=True):
+        np.testing.assert_allclose(curve_normals, sweep.normals_in_world, atol=1e-12)
 
 
 def test_same_seed_same_session_other_seed_other_session(sphere_scene: ProbeScene) -> None:
