@@ -20,6 +20,8 @@ from numpy.typing import ArrayLike, NDArray
 from scipy import ndimage
 from scipy.spatial import cKDTree
 
+from recognition.rigid import cross
+
 __all__ = ["DistanceField", "MeshDistance"]
 
 Array = NDArray[np.float64]
@@ -40,10 +42,17 @@ class MeshDistance:
     def __init__(self, vertices: ArrayLike, faces: ArrayLike) -> None:
         self.vertices = np.ascontiguousarray(vertices, dtype=np.float64)
         self.faces = np.ascontiguousarray(faces, dtype=np.int64)
-        tri = self.vertices[self.faces]
-        fn = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
-        self.face_normals = fn / np.maximum(np.linalg.norm(fn, axis=1, keepdims=True), 1e-300)
         self._tree: Any = None
+        self._face_normals: Array | None = None
+
+    @property
+    def face_normals(self) -> Array:
+        """Unit face normals (f, 3) (computed on first use)."""
+        if self._face_normals is None:
+            tri = self.vertices[self.faces]
+            fn = cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+            self._face_normals = fn / np.maximum(np.linalg.norm(fn, axis=1, keepdims=True), 1e-300)
+        return self._face_normals
 
     def closest(self, points: ArrayLike) -> tuple[Array, Array, IntArray]:
         """Closest points on the mesh.

@@ -17,7 +17,6 @@ import contextlib
 import hashlib
 import json
 import os
-import tempfile
 import zipfile
 import zlib
 from collections.abc import Iterator
@@ -25,6 +24,8 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from recognition.files import write_atomic
 
 __all__ = [
     "ENV_ASSETS_DIR",
@@ -84,16 +85,7 @@ def write_npz_atomic(path: Path, arrays: dict[str, np.ndarray], meta: dict[str, 
     """
     meta = {**meta, "checksum": array_checksum(arrays)}
     payload = {**arrays, "meta": np.array(json.dumps(meta, sort_keys=True))}
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}-", suffix=".npz.tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "wb") as handle:
-            np.savez_compressed(handle, **payload)
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, path)
-    except BaseException:
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
-        raise
+    write_atomic(path, lambda handle: np.savez_compressed(handle, **payload))
 
 
 def read_npz(path: Path, names: tuple[str, ...]) -> tuple[dict[str, np.ndarray], dict] | None:

@@ -13,7 +13,13 @@ from typing import TYPE_CHECKING
 
 from tactile_sim.errors import AssetError
 from tactile_sim.objects.cache import build_lock, generated_dir
-from tactile_sim.objects.catalog import load_catalog
+from tactile_sim.objects.catalog import (
+    MeshingSettings,
+    cache_key,
+    load_catalog,
+    load_object_recipe,
+    object_names,
+)
 
 if TYPE_CHECKING:
     from recognition import ModelDatabase
@@ -30,11 +36,10 @@ def catalog_database(*, progress: bool = True) -> ModelDatabase:
     """
     from recognition import DATABASE_FORMAT, InvalidModel, MeshModelConfig, ModelDatabase
 
-    catalog = load_catalog()
     config = MeshModelConfig()
-    payload = json.dumps(
-        [sorted((n, o.recipe_hash) for n, o in catalog.items()), repr(config), DATABASE_FORMAT]
-    )
+    settings = MeshingSettings()
+    recipes = {n: cache_key(load_object_recipe(n), settings) for n in object_names()}
+    payload = json.dumps([sorted(recipes.items()), repr(config), DATABASE_FORMAT])
     key = hashlib.sha256(payload.encode()).hexdigest()[:16]
     directory = generated_dir("database") / key
     try:
@@ -45,6 +50,7 @@ def catalog_database(*, progress: bool = True) -> ModelDatabase:
         try:
             return ModelDatabase.load(directory, config=config)
         except InvalidModel:
+            catalog = load_catalog()
             if progress:
                 print(
                     f"building the recognition database of {len(catalog)} objects "

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.stats import chi2
+from scipy.special import gammaincinv
 
 from recognition.surfaces.data_curves import DataCurves
 from recognition.surfaces.local_geometry import LocalSurfaceGeometry, local_surface_geometry
@@ -164,7 +164,8 @@ def data_noise_m(curves: DataCurves) -> float:
         coef = np.linalg.solve(AT @ A + 1e-12 * np.eye(NOISE_DEGREE + 1), AT @ y[..., None])
         residual = y - (A @ coef)[..., 0]
         dof = w - NOISE_DEGREE - 1
-        variances.append(np.sum(residual * residual, axis=1) / chi2.median(dof))
+        chi2_median = 2.0 * float(gammaincinv(dof / 2.0, 0.5))  # of chi-square, dof degrees
+        variances.append(np.sum(residual * residual, axis=1) / chi2_median)
     if not variances:
         return plane_scatter_m(curves)
     return float(np.sqrt(np.median(np.concatenate(variances))))
