@@ -20,6 +20,7 @@ if not os.environ.get("DISPLAY"):
 
 import mujoco
 from dm_control import mjcf
+from dm_control import mujoco as dm_mujoco
 
 __all__ = [
     "ARM_JOINTS",
@@ -44,6 +45,7 @@ __all__ = [
     "attach_object",
     "build_physics",
     "load_scene",
+    "physics_of",
     "probe_deflection",
     "raise_on_warnings",
     "scene_model",
@@ -281,6 +283,11 @@ def add_tip_contact(model: mjcf.RootElement) -> mjcf.Element:
         rgba=(0.2, 0.9, 0.3, 0.4),
     )
     return body
+
+
+def physics_of(model: mujoco.MjModel) -> dm_mujoco.Physics:
+    """Returns dm_control's physics of a compiled model (e.g. one read from a cache)."""
+    return dm_mujoco.Physics.from_model(dm_mujoco.wrapper.MjModel(model))
 
 
 def build_physics(model: mjcf.RootElement) -> mjcf.Physics:

@@ -7,9 +7,10 @@ sensor never does.
 
 from __future__ import annotations
 
+import hashlib
 import time
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import mujoco
 import numpy as np
@@ -18,7 +19,7 @@ from numpy.typing import ArrayLike, NDArray
 from recognition.rigid import apply_pose
 from recognition.surfaces.distance import MeshDistance
 from tactile_sim import scene
-from tactile_sim.objects.visual import visual_mesh
+from tactile_sim.objects.cache import generated_dir, read_npz, write_npz_atomic
 from tactile_sim.probing.placement import (
     MOUNT_IN_WORLD,
     ObjectLike,
@@ -26,9 +27,6 @@ from tactile_sim.probing.placement import (
     random_pose,
     resolve_object,
 )
-
-if TYPE_CHECKING:
-    from dm_control import mjcf
 
 __all__ = [
     "ProbeScene",
@@ -42,7 +40,8 @@ class ProbeScene:
 
     Attributes
     ----------
-    physics : dm_control.mjcf.Physics
+    physics : dm_control.mujoco.Physics
+        The compiled scene (:func:`tactile_sim.scene.physics_of`).
     target : ProbeTarget
         The object (name, mesh, collision parts).
     T_world_from_object : (4, 4) float
@@ -52,7 +51,7 @@ class ProbeScene:
         (:mod:`tactile_sim.probing.tip_contact`); False: the object's convex parts.
     """
 
-    physics: mjcf.Physics
+    physics: Any
     target: ProbeTarget
     T_world_from_object: NDArray[np.float64]
     build_seconds: float
@@ -190,19 +189,17 @@ def build_probe_scene(
             raise ValueError("T_world_from_object must be a (4, 4) rigid transform")
     quat = np.zeros(4)
     mujoco.mju_mat2Quat(quat, np.ascontiguousarray(T[:3, :3]).reshape(9))
-    model = scene.scene_model()
-    scene.attach_object(
-        model,
-        _mjcf_name(target.name),
-        [(v, f) for v, f in target.parts.parts],
-        visual_mesh=visual_mesh(target.mesh),
-        position_in_mount=T[:3, 3] - MOUNT_IN_WORLD,
-        quat_wxyz_in_mount=quat,
-        tip_collides=not tip_contact,
-    )
-    if tip_contact:
-        scene.add_tip_contact(model)
-    physics = scene.build_physics(model)
+    name = _mjcf_name(target.name)
+    physics = scene.physics_of(_compiled_scene(target, name, tip_contact))
+    # The object is welded to the world: its pose is its body's place under the mount.
+    model = physics.model.ptr
+    body = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, f"{name}/object")
+    mount_pos, mount_quat = model.body_pos[body].copy(), model.body_quat[body].copy()
+    offset = np.zeros(3)
+    mujoco.mju_rotVecQuat(offset, T[:3, 3] - MOUNT_IN_WORLD, mount_quat)
+    model.body_pos[body] = mount_pos + offset
+    mujoco.mju_mulQuat(model.body_quat[body], mount_quat, quat)
+    scene.step(physics, 0)
     return ProbeScene(
         physics=physics,
         target=target,
@@ -210,6 +207,47 @@ def build_probe_scene(
         build_seconds=time.perf_counter() - start,
         tip_contact=tip_contact,
     )
+
+
+#: Version of the compiled-scene cache entries; another version is compiled again.
+SCENE_CACHE_FORMAT = 1
+
+
+def _compiled_scene(target: ProbeTarget, name: str, tip_contact: bool) -> mujoco.MjModel:
+    """The compiled scene with the object at the mount in its model pose, from the cache
+    (keyed by the scene files, MuJoCo's version, the object's parts and drawn mesh), else
+    compiled and cached (about 0.5 s; checksummed, written atomically)."""
+    drawn = target.drawn_mesh
+    digest = hashlib.sha256(
+        repr((SCENE_CACHE_FORMAT, mujoco.__version__, name, tip_contact)).encode()
+    )
+    for path in sorted(scene.SCENES_DIR.glob("*.xml")):
+        digest.update(path.read_bytes())
+    for vertices, faces in (*target.parts.parts, (drawn.vertices, drawn.faces)):
+        digest.update(np.ascontiguousarray(vertices, dtype=np.float64).tobytes())
+        digest.update(np.ascontiguousarray(faces, dtype=np.int64).tobytes())
+    key = digest.hexdigest()[:24]
+    path = generated_dir("scenes") / f"{name}-{key}.npz"
+    cached = read_npz(path, ("mjb",))
+    if cached is not None:
+        return mujoco.MjModel.from_binary_path(
+            "scene.mjb", assets={"scene.mjb": cached[0]["mjb"].tobytes()}
+        )
+    mjcf_model = scene.scene_model()
+    scene.attach_object(
+        mjcf_model,
+        name,
+        [(v, f) for v, f in target.parts.parts],
+        visual_mesh=drawn,
+        tip_collides=not tip_contact,
+    )
+    if tip_contact:
+        scene.add_tip_contact(mjcf_model)
+    model = scene.build_physics(mjcf_model).model.ptr
+    buffer = np.empty(mujoco.mj_sizeModel(model), dtype=np.uint8)
+    mujoco.mj_saveModel(model, None, buffer)
+    write_npz_atomic(path, {"mjb": buffer}, {"key": key})
+    return model
 
 
 def _mjcf_name(name: str) -> str:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -66,3 +67,22 @@ def test_sweeps_fit_counts_the_contacts_a_sweep_can_take(sphere_scene: ProbeScen
     expected = np.mean(np.abs(offsets) < math.sin(math.radians(60)) * 0.034)
     assert fit == pytest.approx(expected, abs=1.5 / len(offsets))
     assert fit < 1.0
+
+
+def test_the_compiled_scene_is_cached_and_a_damaged_entry_compiled_again(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from tactile_sim.objects.cache import ENV_ASSETS_DIR
+    from tactile_sim.probing import build_probe_scene
+
+    monkeypatch.setenv(ENV_ASSETS_DIR, str(tmp_path))
+    first = probe_object("sphere", seed=3, n_points=5)
+    (entry,) = (tmp_path / "scenes").glob("*.npz")
+    size = entry.stat().st_size
+    cached = probe_object("sphere", seed=3, n_points=5)
+    for a, b in zip(first.curves.curves, cached.curves.curves, strict=True):
+        np.testing.assert_array_equal(a, b)
+    entry.write_bytes(entry.read_bytes()[:-100])  # truncated: compiled again, same scene
+    again = build_probe_scene("sphere", seed=3, progress=False)
+    np.testing.assert_array_equal(again.T_world_from_object, first.ground_truth.T_world_from_object)
+    assert entry.stat().st_size == size
