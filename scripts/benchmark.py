@@ -93,9 +93,18 @@ def parse_args(argv: list[str] | None = None) -> BenchmarkConfig:
         type=float,
         help="with --source sim: point spacing instead of the experiment's own",
     )
+    p.add_argument(
+        "--model-error-mm",
+        type=float,
+        default=0.0,
+        help="with --source sim: each probed object displaced from its model along the "
+        "normals by a smooth random field of this RMS, mm (default 0)",
+    )
     a = p.parse_args(argv)
     if a.sim_spacing_mm is not None and not 0 < a.sim_spacing_mm < 20:
         p.error("--sim-spacing-mm must lie in (0, 20)")
+    if not 0 <= a.model_error_mm < 5:
+        p.error("--model-error-mm must lie in [0, 5)")
     if a.sessions < 1:
         p.error("--sessions must be at least 1")
     if a.source == "sim" and (a.mesh_dir is not None or a.sweep is not None):
@@ -139,6 +148,7 @@ def parse_args(argv: list[str] | None = None) -> BenchmarkConfig:
             curves=a.sim_curves,
             spacing_mm=a.sim_spacing_mm,
             seed=a.seed,
+            model_error_mm=a.model_error_mm,
         ),
         sweep=a.sweep,
     )

@@ -3,6 +3,7 @@
 python scripts/probe.py --object cat
 python scripts/probe.py --object snail --seed 3 --out runs/snail
 python scripts/probe.py --object cat --rerun serve --web-port 9090
+python scripts/probe.py --object cat --model-error-mm 0.1 --json runs/cat.json
 """
 
 from __future__ import annotations
@@ -44,12 +45,21 @@ def show(s: dict[str, Any]) -> None:
             f"location error on {s['object']}: {s['location_error_mm']:.3f} mm; pose error "
             f"{s['pose_error_deg']:.2f} deg, data {s['pose_error_mm']:.3f} mm from their true place"
         )
+    if "model_error_mm" in s:
+        e = s["model_error_mm"]
+        print(
+            f"model error: the object lies {e['achieved_rms']:.3f} mm RMS from its model "
+            f"(asked {e['requested_rms']:g} mm, correlation {e['correlation']:g} mm)"
+        )
+    if s["outliers"]:
+        print(f"outliers rejected: points {', '.join(map(str, s['outliers']))}")
     for message in s["truncated_sweeps"]:
         print(f"  truncated: {message}")
     t = s["timings_s"]
     print(
-        f"timings: database {t['database']:.2f} s, probing {t['probing']:.2f} s, "
-        f"recognition {t['recognition']:.2f} s, total {t['total']:.2f} s"
+        f"timings: database {t['database']:.2f} s, probing {t['probing']:.2f} s (scene "
+        f"{t['scene_build']:.2f} s), recognition {t['recognition']:.2f} s, total "
+        f"{t['total']:.2f} s"
     )
     print(f"curves: {s['curves_file']}")
     if s.get("recording"):
@@ -74,9 +84,25 @@ def parse_args(argv: list[str] | None = None) -> ProbeRunConfig:
     )
     p.add_argument("--web-port", type=int, default=9090, help="web viewer HTTP port (serve)")
     p.add_argument("--grpc-port", type=int, default=9876, help="recording gRPC port (serve)")
+    p.add_argument(
+        "--model-error-mm",
+        type=float,
+        default=0.0,
+        help="probe the object displaced from its model along the normals by a smooth "
+        "random field of this RMS, mm (default 0)",
+    )
+    p.add_argument(
+        "--model-error-correlation-mm",
+        type=float,
+        default=5.0,
+        help="correlation length of that field, mm",
+    )
+    p.add_argument("--json", type=Path, default=None, help="also write the summary here")
     a = p.parse_args(argv)
     if a.n_points < 5 or a.spacing_mm <= 0:
         p.error("--n-points must be at least 5 and --spacing-mm positive")
+    if not a.model_error_mm >= 0 or not a.model_error_correlation_mm > 0:
+        p.error("--model-error-mm must be >= 0 and --model-error-correlation-mm positive")
     return ProbeRunConfig(
         object_name=a.object,
         seed=a.seed,
@@ -87,6 +113,9 @@ def parse_args(argv: list[str] | None = None) -> ProbeRunConfig:
         rerun=a.rerun,
         web_port=a.web_port,
         grpc_port=a.grpc_port,
+        model_error_mm=a.model_error_mm,
+        model_error_correlation_mm=a.model_error_correlation_mm,
+        json_path=a.json,
     )
 
 

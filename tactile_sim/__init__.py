@@ -20,6 +20,7 @@ from tactile_sim.errors import (
     SweepTruncated,
     UnknownObject,
     UnreachablePoint,
+    UnusableCurves,
     WorkspaceLimit,
 )
 
@@ -34,5 +35,6 @@ __all__ = [
     "SweepTruncated",
     "UnknownObject",
     "UnreachablePoint",
+    "UnusableCurves",
     "WorkspaceLimit",
 ]

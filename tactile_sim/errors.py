@@ -16,6 +16,7 @@ __all__ = [
     "SweepTruncated",
     "UnknownObject",
     "UnreachablePoint",
+    "UnusableCurves",
     "WorkspaceLimit",
 ]
 
@@ -103,3 +104,8 @@ class UnreachablePoint(SimulationError, ValueError):
 
 class SweepTruncated(SimulationError, RuntimeError):
     """A sweep lost so many points (edges, steep surfaces) that no data curve is left."""
+
+
+class UnusableCurves(SimulationError, RuntimeError):
+    """The sensed curves are not data curves recognition can use (e.g. their tangents at
+    the common point are parallel): names what is wrong with them."""

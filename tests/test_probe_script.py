@@ -54,3 +54,39 @@ def test_an_unknown_object_lists_the_known_ones_and_exits_2(
     err = capsys.readouterr().err
     assert err.count("\n") == 1
     assert "unicorn" in err and "cat" in err and "elephant" in err
+
+
+@pytest.mark.slow
+def test_a_model_error_is_probed_reported_and_written_to_the_summary(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    import json
+
+    probe = load_script("probe")
+    summary_path = tmp_path / "summary.json"
+    args = ["--object", "cat", "--model-error-mm", "0.1", "--rerun", "off"]
+    config = probe.parse_args([*args, "--out", str(tmp_path), "--json", str(summary_path)])
+    summary = probe.run(config)
+    error = summary["model_error_mm"]
+    assert error["requested_rms"] == 0.1 and error["achieved_rms"] == pytest.approx(0.1, rel=0.1)
+    assert summary["recognized"] == "cat" and summary["location_error_mm"] < 1.0
+    assert json.loads(summary_path.read_text())["model_error_mm"] == error
+    assert "model error: the object lies" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize(
+    "args",
+    [
+        ["--model-error-mm", "-0.1"],
+        ["--model-error-mm", "nan"],
+        ["--model-error-correlation-mm", "0"],
+    ],
+)
+def test_a_bad_model_error_exits_2_before_any_work(
+    args: list[str], capsys: pytest.CaptureFixture[str]
+) -> None:
+    probe = load_script("probe")
+    with pytest.raises(SystemExit) as exit_:
+        probe.main(["--object", "cat", "--rerun", "off", *args])
+    assert exit_.value.code == 2
+    assert "--model-error" in capsys.readouterr().err

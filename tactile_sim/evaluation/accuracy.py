@@ -1,7 +1,8 @@
 """Accuracy and speed of the simulated probe: sensed points against the meshes, wall times.
 
 :func:`sensing_accuracy` probes objects and measures every sensed point against the
-object's original mesh (libigl AABB: exact point-triangle distances; not
+surface MuJoCo touched and against the object's mesh, and MuJoCo's contact points
+against the mesh (libigl AABB: exact point-triangle distances; not
 ``trimesh.proximity``, which is wrong at this scale). :func:`session_timing` measures
 the wall time of warm probing sessions, :func:`probe_script_seconds` that of
 ``scripts/probe.py`` as a user runs it; :func:`collision_report` the collision parts.
@@ -9,6 +10,7 @@ the wall time of warm probing sessions, :func:`probe_script_seconds` that of
 
 from __future__ import annotations
 
+import json
 import subprocess
 import sys
 import tempfile
@@ -28,6 +30,8 @@ from tactile_sim.probing import ProbingConfig, build_probe_scene, probe_object
 from tactile_sim.sensor import SensorConfig
 
 __all__ = [
+    "ERRORS",
+    "SCRIPT_PARTS",
     "AccuracyResult",
     "ObjectAccuracy",
     "TimingResult",
@@ -42,20 +46,37 @@ __all__ = [
 PROBE_SCRIPT = Path(__file__).resolve().parents[2] / "scripts" / "probe.py"
 
 
+#: The three errors of a sensed point the sensing report keeps apart.
+ERRORS = ("sensor", "geometry", "total")
+
+
+def _stats_mm(values_m: NDArray[np.float64]) -> dict[str, float]:
+    return {
+        "mean_mm": float(values_m.mean()) * 1e3,
+        "p95_mm": float(np.percentile(values_m, 95)) * 1e3,
+        "max_mm": float(values_m.max()) * 1e3,
+    }
+
+
 @dataclass(frozen=True)
 class ObjectAccuracy:
-    """Sensed-point errors on one object over several sessions.
+    """Sensed-point errors on one object over several sessions, kept apart by cause.
 
     Attributes
     ----------
     name : str
     seeds : tuple of int
         Session seeds.
-    distance_to_mesh_m : (n,) float, metres
-        Distance of every sensed point to the original mesh.
-    error_to_true_m : (n,) float, metres
-        Distance of every sensed point to its true contact point (the mesh point closest
-        to the simulator's tip centre).
+    sensor_m : (n,) float, metres
+        Sensor error: distance of every sensed point from where MuJoCo's contact met the
+        surface the tip touched (the collider).
+    geometry_m : (n,) float, metres
+        Geometry error: distance of those contact points from the object's mesh.
+    total_m : (n,) float, metres
+        Distance of every sensed point from the object's mesh.
+    contacts_missing : int
+        Readings at which MuJoCo reported no tip contact (the contact point is then the
+        mesh point nearest the tip centre).
     truncated_sweeps : int
         Sweeps that lost points (edges, steep surfaces).
     stylus_contacts : int
@@ -66,61 +87,66 @@ class ObjectAccuracy:
 
     name: str
     seeds: tuple[int, ...]
-    distance_to_mesh_m: NDArray[np.float64]
-    error_to_true_m: NDArray[np.float64]
+    sensor_m: NDArray[np.float64]
+    geometry_m: NDArray[np.float64]
+    total_m: NDArray[np.float64]
+    contacts_missing: int
     truncated_sweeps: int
     stylus_contacts: int
     session_seconds: tuple[float, ...]
 
+    def summary(self) -> dict[str, Any]:
+        """Returns the figures in millimetres, JSON-ready."""
+        return {
+            "n_points": len(self.total_m),
+            **{
+                f"{which}_{k}": v
+                for which in ERRORS
+                for k, v in _stats_mm(getattr(self, f"{which}_m")).items()
+            },
+            "contacts_missing": self.contacts_missing,
+            "truncated_sweeps": self.truncated_sweeps,
+            "stylus_contacts": self.stylus_contacts,
+            "session_seconds": list(self.session_seconds),
+        }
+
 
 @dataclass(frozen=True)
 class AccuracyResult:
-    """Sensed points against the original meshes, pooled over objects.
+    """Sensed points against the colliders and the meshes, pooled over objects.
 
     Attributes
     ----------
     objects : tuple of ObjectAccuracy
-    n_points : int
-    mean_m, p95_m, max_m : float, metres
-        Distance of the sensed points to the original mesh: mean, 95th percentile, max.
-    error_to_true_mean_m, error_to_true_p95_m : float, metres
-        Distance to the true contact points: mean and 95th percentile.
     """
 
     objects: tuple[ObjectAccuracy, ...]
-    n_points: int
-    mean_m: float
-    p95_m: float
-    max_m: float
-    error_to_true_mean_m: float
-    error_to_true_p95_m: float
+
+    @property
+    def n_points(self) -> int:
+        """Sensed points over all objects."""
+        return sum(len(o.total_m) for o in self.objects)
+
+    def pooled_m(self, which: str) -> NDArray[np.float64]:
+        """One error (``"sensor"``, ``"geometry"`` or ``"total"``) of every point, metres."""
+        return np.concatenate([getattr(o, f"{which}_m") for o in self.objects])
 
     def summary(self) -> dict[str, Any]:
-        """Returns the figures in millimetres, JSON-ready."""
+        """Returns the figures in millimetres, JSON-ready: pooled, then per object."""
         return {
             "n_points": self.n_points,
-            "distance_to_mesh_mean_mm": self.mean_m * 1e3,
-            "distance_to_mesh_p95_mm": self.p95_m * 1e3,
-            "distance_to_mesh_max_mm": self.max_m * 1e3,
-            "error_to_true_contact_mean_mm": self.error_to_true_mean_m * 1e3,
-            "error_to_true_contact_p95_mm": self.error_to_true_p95_m * 1e3,
-            "objects": {
-                o.name: {
-                    "n_points": len(o.distance_to_mesh_m),
-                    "distance_to_mesh_mean_mm": float(o.distance_to_mesh_m.mean()) * 1e3,
-                    "distance_to_mesh_p95_mm": float(np.percentile(o.distance_to_mesh_m, 95)) * 1e3,
-                    "distance_to_mesh_max_mm": float(o.distance_to_mesh_m.max()) * 1e3,
-                    "truncated_sweeps": o.truncated_sweeps,
-                    "stylus_contacts": o.stylus_contacts,
-                    "session_seconds": list(o.session_seconds),
-                }
-                for o in self.objects
+            **{
+                f"{which}_{k}": v
+                for which in ERRORS
+                for k, v in _stats_mm(self.pooled_m(which)).items()
             },
+            "contacts_missing": sum(o.contacts_missing for o in self.objects),
+            "objects": {o.name: o.summary() for o in self.objects},
         }
 
 
 def sensing_accuracy(
-    objects: Sequence[str] = ("cat", "dog", "bird"),
+    objects: Sequence[str] = tuple(object_names()),
     *,
     sessions_per_object: int = 3,
     seed: int = 0,
@@ -128,16 +154,19 @@ def sensing_accuracy(
     sensor: SensorConfig | None = None,
     progress: bool = True,
 ) -> AccuracyResult:
-    """Probes objects (3 sweeps x 21 points at 1.2 mm per session) and measures the
-    sensed points against the original meshes.
+    """Probes objects (3 sweeps x 21 points at 1.2 mm per session) and measures every
+    sensed point against the surface MuJoCo touched and against the object's mesh.
 
-    The defaults give 3 x 3 x 63 = 567 points. Each object is placed once (random pose
-    from ``seed``); each session draws its own point p, plane yaw and noise.
+    Three errors are kept apart (:class:`ObjectAccuracy`): the sensor's (sensed point to
+    MuJoCo's contact point), the collider's (contact point to mesh) and their sum (sensed
+    point to mesh), each over the probed regions only. Each object is placed once
+    (random pose from ``seed``); each session draws its own point p, plane yaw and
+    noise.
 
     Parameters
     ----------
     objects : sequence of str
-        Catalog or solid names.
+        Catalog or solid names (default: the ten catalog objects).
     sessions_per_object : int
     seed : int
         Base seed; session k of object i uses ``seed + 1000 * i + k``.
@@ -149,8 +178,8 @@ def sensing_accuracy(
     per_object = []
     for i, name in enumerate(objects):
         probe_scene = build_probe_scene(name, seed=seed + 1000 * i, progress=progress)
-        distances, errors, seconds, seeds = [], [], [], []
-        truncated = stylus = 0
+        sensor_m, geometry_m, total_m, seconds, seeds = [], [], [], [], []
+        truncated = stylus = missing = 0
         for k in range(sessions_per_object):
             session_seed = seed + 1000 * i + k
             start = time.perf_counter()
@@ -165,37 +194,27 @@ def sensing_accuracy(
             seconds.append(time.perf_counter() - start)
             seeds.append(session_seed)
             for sweep in session.sweeps:
-                _, d = probe_scene.closest_points_in_world(sweep.points_in_world)
-                distances.append(d)
-                errors.append(
-                    np.linalg.norm(
-                        sweep.points_in_world - sweep.true_contact_points_in_world, axis=1
-                    )
-                )
+                contacts = sweep.true_contact_points_in_world
+                sensor_m.append(np.linalg.norm(sweep.points_in_world - contacts, axis=1))
+                geometry_m.append(probe_scene.closest_points_in_world(contacts)[1])
+                total_m.append(probe_scene.closest_points_in_world(sweep.points_in_world)[1])
+                missing += int(np.count_nonzero(~sweep.contact_found))
                 truncated += int(sweep.truncated)
                 stylus += int(np.count_nonzero(sweep.stylus_contacts))
         per_object.append(
             ObjectAccuracy(
                 name=name,
                 seeds=tuple(seeds),
-                distance_to_mesh_m=np.concatenate(distances),
-                error_to_true_m=np.concatenate(errors),
+                sensor_m=np.concatenate(sensor_m),
+                geometry_m=np.concatenate(geometry_m),
+                total_m=np.concatenate(total_m),
+                contacts_missing=missing,
                 truncated_sweeps=truncated,
                 stylus_contacts=stylus,
                 session_seconds=tuple(seconds),
             )
         )
-    distance = np.concatenate([o.distance_to_mesh_m for o in per_object])
-    error = np.concatenate([o.error_to_true_m for o in per_object])
-    return AccuracyResult(
-        objects=tuple(per_object),
-        n_points=len(distance),
-        mean_m=float(distance.mean()),
-        p95_m=float(np.percentile(distance, 95)),
-        max_m=float(distance.max()),
-        error_to_true_mean_m=float(error.mean()),
-        error_to_true_p95_m=float(np.percentile(error, 95)),
-    )
+    return AccuracyResult(objects=tuple(per_object))
 
 
 @dataclass(frozen=True)
@@ -258,30 +277,53 @@ def session_timing(
     )
 
 
-def probe_script_seconds(name: str = "cat", *, runs: int = 4, seed: int = 0) -> list[float]:
+#: The parts of a ``scripts/probe.py`` run that :func:`probe_script_seconds` reports:
+#: (label, key).
+SCRIPT_PARTS = (
+    ("start-up and imports", "startup"),
+    ("database load", "database"),
+    ("probing", "probing"),
+    ("recognition", "recognition"),
+    ("total", "wall"),
+)
+
+
+def probe_script_seconds(
+    name: str = "cat", *, runs: int = 4, seed: int = 0
+) -> list[dict[str, float]]:
     """Returns the wall times of ``runs`` runs of ``scripts/probe.py --object name``, each a
     fresh process as a user starts it (seeds ``seed``, ``seed + 1``, ...; the first run
-    warms the caches), seconds.
+    warms the caches), seconds: ``wall`` and its parts (:data:`SCRIPT_PARTS`, from the
+    run's ``--json`` summary; ``startup`` is the wall time outside the script's own).
 
     Raises
     ------
     SimulationError
         A run failed (its last error output is in the message).
     """
-    command = [sys.executable, str(PROBE_SCRIPT), "--object", name]
-    walls = []
-    with tempfile.TemporaryDirectory() as out:
+    command = [sys.executable, str(PROBE_SCRIPT), "--object", name, "--rerun", "save"]
+    out = []
+    with tempfile.TemporaryDirectory() as tmp:
         for k in range(runs):
+            summary_path = Path(tmp) / f"run{k}.json"
             start = time.perf_counter()
             done = subprocess.run(
-                [*command, "--seed", str(seed + k), "--out", out],
+                [*command, "--seed", str(seed + k), "--out", tmp, "--json", str(summary_path)],
                 capture_output=True,
                 text=True,
             )
+            wall = time.perf_counter() - start
             if done.returncode != 0:
                 raise SimulationError(f"probe.py failed: {done.stderr.strip()[-300:]}")
-            walls.append(time.perf_counter() - start)
-    return walls
+            timings = json.loads(summary_path.read_text())["timings_s"]
+            out.append(
+                {
+                    "wall": wall,
+                    "startup": wall - timings["total"],
+                    **{k: timings[k] for k in ("database", "probing", "recognition")},
+                }
+            )
+    return out
 
 
 def collision_report(names: Sequence[str] | None = None) -> list[dict[str, Any]]:

@@ -10,7 +10,6 @@ summary optionally to JSON.
 
 from __future__ import annotations
 
-import json
 import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import replace
@@ -33,6 +32,7 @@ from recognition.evaluation import (
 from recognition.evaluation import run as run_jobs
 from recognition.evaluation.figures import catalog_sessions_figure, solids_figure, sweep_figure
 from recognition.evaluation.reports import RunInfo, catalog_report, machine, sweep_report
+from recognition.files import write_json_atomic
 from recognition.reproduction.chapter4_closed_form import SolidExperiment
 from tactile_sim.errors import UnknownObject
 from tactile_sim.evaluation.accuracy import (
@@ -44,6 +44,7 @@ from tactile_sim.evaluation.benchmark_config import (
     RUNS_DIR,
     SENSING_OBJECTS,
     SWEEPS,
+    TIMED_OBJECT,
     BenchmarkConfig,
 )
 from tactile_sim.evaluation.databases import benchmark_database
@@ -120,14 +121,6 @@ def _shown(path: Path) -> str:
     return str(path.relative_to(root) if path.is_relative_to(root) else path)
 
 
-def _write_json(path: Path, payload: object) -> None:
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_suffix(path.suffix + ".tmp")
-    tmp.write_text(json.dumps(payload, indent=2))
-    tmp.replace(path)
-
-
 def _run_info(config: BenchmarkConfig, started: str) -> RunInfo:
     return RunInfo(config.report.command, started, config.run.workers, config.run.backend)
 
@@ -171,7 +164,7 @@ def run_synthetic(
     summary = summarize(records)
     payload = summary_json(summary)
     if config.report.json_path:
-        _write_json(config.report.json_path, payload)
+        write_json_atomic(config.report.json_path, payload)
     settings = (
         f"Instances: {syn.per_model} per model, n = {syn.n_points} points per curve at "
         f"d = {syn.spacing_mm} mm (l = {(syn.n_points - 1) * syn.spacing_mm:g} mm), "
@@ -223,7 +216,7 @@ def run_sweep(
     }
     out = Path(config.report.out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    _write_json(out / f"{stem}.json", payload)
+    write_json_atomic(out / f"{stem}.json", payload)
     sweep_figure(results, sweep.parameter, sweep.figure, out / f"{stem}.png")
     settings = (
         f"Instances: {syn.per_model} per model; unless swept, n = {syn.n_points} "
@@ -250,7 +243,12 @@ def _sim_source(config: BenchmarkConfig, experiment: str) -> SimulatedSource | N
     its objects is to be probed)."""
     sim = config.sim
     make = catalog_experiment if experiment == "catalog" else solids_experiment
-    source = make(sessions_per_object=sim.sessions, curves=sim.curves, seed=sim.seed)
+    source = make(
+        sessions_per_object=sim.sessions,
+        curves=sim.curves,
+        seed=sim.seed,
+        model_error_m=sim.model_error_mm * 1e-3,
+    )
     if sim.spacing_mm is not None:
         source = replace(source, spacing_m=sim.spacing_mm * 1e-3)
     if sim.objects is not None:
@@ -329,7 +327,7 @@ def run_sim(config: BenchmarkConfig, *, echo: Echo = print) -> dict[str, Any]:
         text += f"\n![{name}]({figure.name})\n"
         _write_report(config, f"{name}{tag}.md", text, echo)
     if config.report.json_path:
-        _write_json(config.report.json_path, summary)
+        write_json_atomic(config.report.json_path, summary)
     return summary
 
 
@@ -340,10 +338,11 @@ def run_sensing(config: BenchmarkConfig, started: str, *, echo: Echo = print) ->
     sim = config.sim
     objects = sim.objects or SENSING_OBJECTS
     accuracy = sensing_accuracy(objects, sessions_per_object=sim.sessions, seed=sim.seed)
-    timing = session_timing(objects[0], repeats=3, seed=sim.seed)
-    walls = probe_script_seconds(objects[0], runs=4, seed=sim.seed)
+    timed = TIMED_OBJECT if TIMED_OBJECT in objects else objects[0]
+    timing = session_timing(timed, repeats=3, seed=sim.seed)
+    walls = probe_script_seconds(timed, runs=4, seed=sim.seed)
     figures = accuracy.summary() | {
-        "session_object": objects[0],
+        "session_object": timed,
         "session_build_s": list(timing.build_seconds),
         "session_probe_s": list(timing.probe_seconds),
         "session_total_s": list(timing.session_seconds),

@@ -16,6 +16,7 @@ from pathlib import Path
 
 from recognition import RegistrationConfig, config_for
 from recognition.evaluation import SyntheticSource
+from tactile_sim.objects import OBJECT_NAMES
 
 __all__ = [
     "EXPERIMENTS",
@@ -24,6 +25,7 @@ __all__ = [
     "SENSING_OBJECTS",
     "SOURCES",
     "SWEEPS",
+    "TIMED_OBJECT",
     "BenchmarkConfig",
     "MeshSettings",
     "MethodSettings",
@@ -39,8 +41,12 @@ RUNS_DIR = Path(__file__).resolve().parents[2] / "runs"
 METHODS = ("fast", "thesis", "icp-baseline")
 SOURCES = ("synthetic", "sim")
 EXPERIMENTS = ("catalog", "solids", "sensing")
-#: Objects of the sensing experiment unless :attr:`SimSettings.objects` names others.
-SENSING_OBJECTS = ("cat", "dog", "bird")
+#: Objects of the sensing experiment unless :attr:`SimSettings.objects` names others: the
+#: ten catalog objects.
+SENSING_OBJECTS = OBJECT_NAMES
+#: The object whose sessions and ``scripts/probe.py`` runs the sensing experiment times
+#: (the demo's), when it is among the objects.
+TIMED_OBJECT = "cat"
 
 
 @dataclass(frozen=True)
@@ -254,6 +260,9 @@ class SimSettings:
         Point spacing of every experiment instead of its own (1.2 mm on the catalog,
         0.05 mm on the solids).
     seed : int
+    model_error_mm : float
+        RMS (mm) of the smooth random displacement of every probed object from its
+        model (:func:`~tactile_sim.probing.displaced_target`); 0: none.
     """
 
     experiments: tuple[str, ...] = EXPERIMENTS
@@ -262,6 +271,7 @@ class SimSettings:
     curves: str = "sensed"
     spacing_mm: float | None = None
     seed: int = 0
+    model_error_mm: float = 0.0
 
 
 @dataclass(frozen=True)

@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from recognition.files import write_json_atomic
 from recognition.rigid import rotation_angle
 from tactile_sim.evaluation.benchmark_config import RUNS_DIR
 
@@ -47,6 +48,14 @@ class ProbeRunConfig:
         Ports of the web viewer ("serve"): HTTP for the page, gRPC for the data.
     trajectory_hz : float
         Rate (per second of simulated time) at which the recording samples the robot.
+    model_error_mm : float
+        RMS (mm) of a smooth random displacement of the probed object from its model
+        along the normals, seeded by ``seed`` (:func:`~tactile_sim.probing.displaced_target`):
+        the object differs from the database's model as a real one from its scan. 0: none.
+    model_error_correlation_mm : float
+        Correlation length of that displacement, mm.
+    json_path : Path or None
+        Where to write the summary as JSON too (written atomically).
     """
 
     object_name: str = "cat"
@@ -59,6 +68,9 @@ class ProbeRunConfig:
     web_port: int = 9090
     grpc_port: int = 9876
     trajectory_hz: float = 200.0
+    model_error_mm: float = 0.0
+    model_error_correlation_mm: float = 5.0
+    json_path: Path | None = None
 
     @property
     def out_dir(self) -> Path:
@@ -84,23 +96,33 @@ def probe_run(config: ProbeRunConfig) -> dict[str, Any]:
     dict
         JSON-ready: ``object``, ``seed``, ``recognized``, ``correct``, ``ranking_mm``
         (None: rejected at table lookup), ``margin_mm``, ``truncated_sweeps``,
-        ``timings_s``, ``location_error_mm``, ``pose_error_deg``, ``pose_error_mm`` (when
-        the true model located p), ``curves_file`` and ``recording`` (unless off).
+        ``timings_s`` (database load, probing with its scene build, recognition, total),
+        ``outliers`` (indices of the points recognition rejected), ``model_error_mm``
+        (requested and achieved RMS, correlation; with a model error),
+        ``location_error_mm`` (from where the data's p lies on the object),
+        ``pose_error_deg``, ``pose_error_mm`` (when the true model located p),
+        ``curves_file`` and ``recording`` (unless off).
 
     Raises
     ------
     UnknownObject
         ``object_name`` is not a catalog object.
+    SimulationError
+        ``model_error_mm`` or its correlation length is negative or not finite.
     PortInUse, RecordingError
         The viewer cannot be served or shown (checked before probing).
     """
     from tactile_sim.errors import UnknownObject
     from tactile_sim.objects import object_names
     from tactile_sim.objects.database import catalog_database
-    from tactile_sim.probing import probe_object
+    from tactile_sim.objects.mismatch import DisplacementField
+    from tactile_sim.probing import displaced_target, probe_object, resolve_object
 
     if config.object_name not in object_names():
         raise UnknownObject(config.object_name, object_names())
+    displacement = DisplacementField(
+        config.model_error_mm * 1e-3, config.model_error_correlation_mm * 1e-3, config.seed
+    )
     if config.rerun == "serve":
         from tactile_sim.recording import check_ports
 
@@ -112,8 +134,9 @@ def probe_run(config: ProbeRunConfig) -> dict[str, Any]:
     start = time.perf_counter()
     database = catalog_database()
     loaded = time.perf_counter()
+    target = displaced_target(resolve_object(config.object_name), displacement)
     session = probe_object(
-        config.object_name,
+        target,
         seed=config.seed,
         n_points=config.n_points,
         spacing_m=config.spacing_mm * 1e-3,
@@ -137,14 +160,22 @@ def probe_run(config: ProbeRunConfig) -> dict[str, Any]:
         "timings_s": {
             "database": loaded - start,
             "probing": probed - loaded,
+            "scene_build": session.build_seconds,
             "recognition": recognized - probed,
             "total": recognized - start,
         },
+        "outliers": [int(i) for i in result.outliers],
     }
+    if config.model_error_mm > 0:
+        summary["model_error_mm"] = {
+            "requested_rms": config.model_error_mm,
+            "achieved_rms": truth.model_error_rms_m * 1e3,
+            "correlation": config.model_error_correlation_mm,
+        }
     own = result.registrations[config.object_name]
     if np.all(np.isfinite(own.location)):
         summary["location_error_mm"] = float(
-            np.linalg.norm(own.location - truth.point_in_object) * 1e3
+            np.linalg.norm(own.location - truth.data_point_in_object) * 1e3
         )
         data = np.concatenate(session.curves.curves)
         angle, shift = pose_error(own.T_model_from_data, T_object_from_world, data)
@@ -161,4 +192,6 @@ def probe_run(config: ProbeRunConfig) -> dict[str, Any]:
         summary["recording"] = record_probe_run(
             session, result, database, mode=config.rerun, path=out / f"{stem}.rrd"
         )
+    if config.json_path is not None:
+        write_json_atomic(Path(config.json_path), summary)
     return summary

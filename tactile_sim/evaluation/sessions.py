@@ -20,12 +20,14 @@ import numpy as np
 from recognition import DataCurves
 from recognition.evaluation import Instance, InstanceSpec
 from recognition.rigid import apply_pose
-from recognition.surfaces.registration import common_point
+from recognition.surfaces.distance import MeshDistance
 from tactile_sim.collision import solid_names
 from tactile_sim.errors import SimulationError, UnknownObject
-from tactile_sim.evaluation.mesh_distances import mesh_distances_m
+from tactile_sim.evaluation.mesh_distances import mesh_distance
 from tactile_sim.objects import object_names
-from tactile_sim.probing import ProbingConfig, probe_object
+from tactile_sim.objects.mismatch import DisplacementField
+from tactile_sim.probing import ProbingConfig, displaced_target, probe_object, resolve_object
+from tactile_sim.probing.session import data_point_in_object
 from tactile_sim.sensor import SensorConfig
 
 __all__ = [
@@ -78,6 +80,12 @@ class SimulatedSource:
     sensor : SensorConfig
         Sensor model (noise).
     seed : int
+    model_error_m : float, metres
+        RMS of the smooth random displacement of each probed object from its model
+        (:func:`~tactile_sim.probing.displaced_target`; seeded per session); 0: the
+        object is its model.
+    model_error_correlation_m : float, metres
+        Correlation length of that displacement.
     """
 
     objects: tuple[str, ...] = field(default_factory=object_names)
@@ -89,8 +97,11 @@ class SimulatedSource:
     probing: ProbingConfig = field(default_factory=ProbingConfig)
     sensor: SensorConfig = field(default_factory=SensorConfig)
     seed: int = 0
+    model_error_m: float = 0.0
+    model_error_correlation_m: float = 5e-3
 
     def __post_init__(self) -> None:
+        DisplacementField(self.model_error_m, self.model_error_correlation_m)  # valid?
         known = (*object_names(), *solid_names())
         for name in self.objects:
             if name not in known:
@@ -118,7 +129,8 @@ class SimulatedSource:
         time, points per curve, truncated sweep sides, the errors of the points (mean
         and max, mm: the sensed points from the true contact points, where MuJoCo's
         contact met the surface the tip touched; the true contact points from the
-        object's mesh; the sensed points from the mesh) and their spacing. A session
+        probed object's mesh; the sensed points from that mesh), their spacing, and the
+        achieved RMS distance of the probed object from its model (``model_error_m``). A session
         that fails (a sweep left with too few points, an unreachable point, an unstable
         simulation) gives an instance without curves whose ``info["error"]`` says why.
 
@@ -127,8 +139,13 @@ class SimulatedSource:
         on the object, by the object's true pose.
         """
         try:
+            target = resolve_object(spec.model, progress=False)
+            displacement = DisplacementField(
+                self.model_error_m, self.model_error_correlation_m, spec.seed
+            )
+            target = displaced_target(target, displacement)
             session = probe_object(
-                spec.model,
+                target,
                 seed=spec.seed,
                 n_points=self.n_points,
                 spacing_m=self.spacing_m,
@@ -151,13 +168,14 @@ class SimulatedSource:
                 for s in session.sweeps
             ]
         )
+        surface = (
+            mesh_distance(spec.model)
+            if target.model_error_rms_m == 0
+            else MeshDistance(target.mesh.vertices, target.mesh.faces)
+        )
         T_object_from_world = np.linalg.inv(truth.T_world_from_object)
-        contact_error = mesh_distances_m(
-            spec.model, apply_pose(T_object_from_world, true_curves.points)
-        )
-        sensed_off_mesh = mesh_distances_m(
-            spec.model, apply_pose(T_object_from_world, session.curves.points)
-        )
+        contact_error = surface.closest(apply_pose(T_object_from_world, true_curves.points))[0]
+        sensed_off_mesh = surface.closest(apply_pose(T_object_from_world, session.curves.points))[0]
         steps = np.concatenate(
             [np.linalg.norm(np.diff(s.points_in_world, axis=0), axis=1) for s in session.sweeps]
         )
@@ -175,12 +193,13 @@ class SimulatedSource:
             "sensed_vs_mesh_max_mm": float(sensed_off_mesh.max() * 1e3),
             "spacing_mean_mm": float(steps.mean() * 1e3),
             "spacing_std_mm": float(steps.std() * 1e3),
+            "model_error_rms_mm": target.model_error_rms_m * 1e3,
         }
         if self.curves == "sensed":
             curves, reference = session.curves, true_curves
         else:
             curves, reference = true_curves, session.curves
-        point = apply_pose(T_object_from_world, common_point(curves)[None])[0]
+        point = data_point_in_object(curves, truth.T_world_from_object)
         return Instance(curves, point, info, reference)
 
 

@@ -14,7 +14,13 @@ horizontal plane instead. The controller's parameters are one :class:`ProbingCon
 from tactile_sim.errors import SweepTruncated
 from tactile_sim.probing.config import ProbingConfig
 from tactile_sim.probing.contour import ContourTrace, trace_contour
-from tactile_sim.probing.placement import PlacementConfig, ProbeTarget, random_pose, resolve_object
+from tactile_sim.probing.placement import (
+    PlacementConfig,
+    ProbeTarget,
+    displaced_target,
+    random_pose,
+    resolve_object,
+)
 from tactile_sim.probing.plan import SamplingPlane, choose_point, sampling_planes
 from tactile_sim.probing.probe_scene import ProbeScene, build_probe_scene
 from tactile_sim.probing.session import GroundTruth, ProbeSession, probe_object
@@ -35,6 +41,7 @@ __all__ = [
     "SweepTruncated",
     "build_probe_scene",
     "choose_point",
+    "displaced_target",
     "probe_object",
     "random_pose",
     "resolve_object",

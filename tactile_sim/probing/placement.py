@@ -25,20 +25,19 @@ from tactile_sim.collision import (
 )
 from tactile_sim.errors import UnknownObject
 from tactile_sim.objects import ObjectModel, load_object, object_names
+from tactile_sim.objects.mismatch import DisplacementField, displaced_mesh
+from tactile_sim.objects.visual import visual_mesh
 
 __all__ = [
     "MOUNT_IN_WORLD",
     "ObjectLike",
     "PlacementConfig",
     "ProbeTarget",
+    "displaced_target",
     "random_pose",
     "resolve_object",
 ]
 
-
-ObjectLike = str | ObjectModel | Solid | trimesh.Trimesh
-"""What can be probed: a catalog or solid name, a catalog object, a solid, or a mesh in
-metres (model frame, base on z = 0)."""
 
 MOUNT_IN_WORLD = np.array([0.40, 0.0, 0.0])
 """The scene's ``object_mount`` site (``scenes/scene.xml``), axes parallel to the world's."""
@@ -52,25 +51,57 @@ class ProbeTarget:
     ----------
     name : str
     mesh : trimesh.Trimesh
-        The original surface, model frame, metres (drawn, and the ground truth).
+        The object's surface, model frame, metres: what the tip touches, and the ground
+        truth.
     parts : ConvexParts
-        Its convex collision parts.
+        Convex collision parts (what holds it on the table).
+    drawn : trimesh.Trimesh or None
+        The mesh drawn (default: a simplified copy of ``mesh``).
+    model_error_rms_m : float
+        How far ``mesh`` lies from the object's model (RMS, metres): 0 unless displaced
+        (:func:`displaced_target`).
     """
 
     name: str
     mesh: trimesh.Trimesh
     parts: ConvexParts
+    drawn: trimesh.Trimesh | None = None
+    model_error_rms_m: float = 0.0
+
+    @property
+    def drawn_mesh(self) -> trimesh.Trimesh:
+        """The mesh the scene draws: ``drawn``, else a simplified copy of ``mesh``."""
+        return self.drawn if self.drawn is not None else visual_mesh(self.mesh)
+
+
+ObjectLike = str | ObjectModel | Solid | trimesh.Trimesh | ProbeTarget
+"""What can be probed: a catalog or solid name, a catalog object, a solid, a mesh in
+metres (model frame, base on z = 0), or a resolved :class:`ProbeTarget`."""
+
+
+def displaced_target(target: ProbeTarget, field: DisplacementField) -> ProbeTarget:
+    """Returns ``target`` with its surface displaced along the normals by ``field`` (an
+    object that differs from its model, :mod:`tactile_sim.objects.mismatch`); the collision
+    parts, which only hold it on the table, stay. ``model_error_rms_m`` is the achieved
+    RMS distance from the original surface."""
+    if field.rms_m == 0:
+        return target
+    mesh, achieved = displaced_mesh(target.mesh, field)
+    drawn, _ = displaced_mesh(visual_mesh(target.mesh), field, scale_from=target.mesh)
+    return ProbeTarget(target.name, mesh, target.parts, drawn, achieved)
 
 
 def resolve_object(obj: ObjectLike, *, progress: bool = True) -> ProbeTarget:
     """Returns the name, mesh and collision parts of a catalog name, solid name,
-    ObjectModel, Solid or trimesh mesh.
+    ObjectModel, Solid or trimesh mesh (a ProbeTarget as it is).
 
     Raises
     ------
     UnknownObject
         A name that is neither a catalog object nor a solid; lists the known names.
     """
+    if isinstance(obj, ProbeTarget):
+        return obj
     if isinstance(obj, str):
         if obj in object_names():
             obj = load_object(obj)
@@ -84,8 +115,8 @@ def resolve_object(obj: ObjectLike, *, progress: bool = True) -> ProbeTarget:
         name, mesh = "object", obj
     else:
         raise TypeError(
-            "object must be a catalog or solid name, an ObjectModel, a Solid or a "
-            f"trimesh.Trimesh, got {type(obj).__name__}"
+            "object must be a catalog or solid name, an ObjectModel, a Solid, a "
+            f"trimesh.Trimesh or a ProbeTarget, got {type(obj).__name__}"
         )
     if isinstance(obj, ObjectModel):
         parts = object_parts(obj, progress=progress)

@@ -18,8 +18,10 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from recognition import DataCurves
-from tactile_sim.errors import SweepTruncated
+from recognition import DataCurves, RecognitionError
+from recognition.rigid import apply_pose
+from recognition.surfaces.registration import common_point
+from tactile_sim.errors import SweepTruncated, UnusableCurves
 from tactile_sim.kinematics import inverse_kinematics
 from tactile_sim.probing.config import ProbingConfig
 from tactile_sim.probing.placement import ObjectLike
@@ -40,6 +42,15 @@ __all__ = [
 
 MIN_CURVE_POINTS = 5
 """Fewest points a data curve may have (``recognition.DataCurves`` asks for five)."""
+
+
+def data_point_in_object(
+    curves: DataCurves, T_world_from_object: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """Returns where the common point p of world-frame curves (what recognition locates,
+    :func:`recognition.surfaces.registration.common_point`) lies on the object, model
+    frame, metres, by the pose ``T_world_from_object``."""
+    return apply_pose(np.linalg.inv(T_world_from_object), common_point(curves)[None])[0]
 
 
 @dataclass(frozen=True)
@@ -63,6 +74,12 @@ class GroundTruth:
         Per curve, the points of the object's mesh nearest the true tip centres.
     true_tip_centres_in_world : tuple of (n_i, 3) float
         Per curve, the simulator's tip centres at the readings.
+    data_point_in_object : (3,) float, metres
+        Where the sensed curves' common point p lies on the object
+        (:func:`data_point_in_object`): the localisation's reference.
+    model_error_rms_m : float
+        How far the probed surface lies from the object's model (RMS, metres; 0 unless
+        the object was displaced on purpose, :func:`~tactile_sim.probing.displaced_target`).
     """
 
     T_world_from_object: NDArray[np.float64]
@@ -72,6 +89,8 @@ class GroundTruth:
     true_contact_points_in_world: tuple[NDArray[np.float64], ...]
     mesh_points_in_world: tuple[NDArray[np.float64], ...]
     true_tip_centres_in_world: tuple[NDArray[np.float64], ...]
+    data_point_in_object: NDArray[np.float64]
+    model_error_rms_m: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -200,6 +219,8 @@ def probe_object(
         names the limit.
     SweepTruncated
         A sweep kept fewer than five points (for an automatic p, after replanning).
+    UnusableCurves
+        The sensed curves are no data curves (for an automatic p, after replanning).
     SimulationError
         MuJoCo became unstable, or no surface was found at p.
     """
@@ -251,25 +272,33 @@ def probe_object(
             run_sweep(runner, probe_scene, plane, line_point, n_points, first=(k == 0))
             for k, plane in enumerate(planes)
         )
+        unusable = None
         if all(sweep.n_points >= MIN_CURVE_POINTS for sweep in sweeps):
-            break
+            try:
+                curves = DataCurves(
+                    curves=tuple(s.points_in_world for s in sweeps),
+                    approach=np.array([0.0, 0.0, -1.0]),
+                    normals=tuple(s.normals_in_world for s in sweeps),
+                )
+                break
+            except RecognitionError as exc:  # e.g. parallel tangents at p: plan again
+                unusable = str(exc)
     else:
+        tried = f" ({attempts} points tried)" if attempts > 1 else ""
+        if unusable is not None:
+            raise UnusableCurves(
+                f"{probe_scene.target.name}: the sensed curves are unusable{tried}: {unusable}"
+            )
         reasons = "; ".join(
             f"sweep {k}: {side.message}"
             for k, sweep in enumerate(sweeps)
             for side in sweep.sides
             if side.stop is not StopReason.COMPLETE
         )
-        tried = f" ({attempts} points tried)" if attempts > 1 else ""
         raise SweepTruncated(
             f"{probe_scene.target.name}: a sweep through p kept fewer than "
             f"{MIN_CURVE_POINTS} points{tried}: {reasons}"
         )
-    curves = DataCurves(
-        curves=tuple(s.points_in_world for s in sweeps),
-        approach=np.array([0.0, 0.0, -1.0]),
-        normals=tuple(s.normals_in_world for s in sweeps),
-    )
     T_object_from_world = np.linalg.inv(T)
     truth = GroundTruth(
         T_world_from_object=T,
@@ -279,6 +308,8 @@ def probe_object(
         true_contact_points_in_world=tuple(s.true_contact_points_in_world for s in sweeps),
         mesh_points_in_world=tuple(s.mesh_points_in_world for s in sweeps),
         true_tip_centres_in_world=tuple(s.true_tip_centres_in_world for s in sweeps),
+        data_point_in_object=data_point_in_object(curves, T),
+        model_error_rms_m=probe_scene.target.model_error_rms_m,
     )
     return ProbeSession(
         object_name=probe_scene.target.name,

@@ -108,6 +108,9 @@ class SweepResult:
         Ground truth: the points of the object's mesh nearest the true tip centres.
     stylus_contacts : (n,) int
         Ground truth: contacts of the shaft or housing at each reading (should be 0).
+    contact_found : (n,) bool
+        Ground truth: whether MuJoCo reported the tip's contact at the reading (else
+        ``true_contact_points_in_world`` holds the nearest mesh point).
     reading_times_s : (n,) float, seconds
         Simulated time of each point's reading.
     """
@@ -123,6 +126,7 @@ class SweepResult:
     mesh_points_in_world: NDArray[np.float64]
     stylus_contacts: NDArray[np.int64]
     reading_times_s: NDArray[np.float64] = field(default_factory=lambda: np.empty(0))
+    contact_found: NDArray[np.bool_] = field(default_factory=lambda: np.zeros(0, bool))
 
     @property
     def truncated(self) -> bool:
@@ -324,13 +328,16 @@ class SweepRunner:
         self.rig.settle(self.config.settle_s)
 
 
-def _touched_or_nearest(samples: list[Sample], nearest: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Where MuJoCo's contact met the touched surface at each reading; at a reading that
-    caught the stiff contact off for a timestep, the mesh point nearest the tip centre."""
+def _touched_or_nearest(
+    samples: list[Sample], nearest: NDArray[np.float64]
+) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+    """Where MuJoCo's contact met the touched surface at each reading, and whether it did;
+    at a reading that caught the stiff contact off for a timestep, the mesh point nearest
+    the tip centre."""
     touched = np.array([s.touched for s in samples]).reshape(-1, 3)
-    missing = ~np.all(np.isfinite(touched), axis=1)
-    touched[missing] = nearest[missing]
-    return touched
+    found = np.all(np.isfinite(touched), axis=1)
+    touched[~found] = nearest[~found]
+    return touched, found
 
 
 def sweep_result(
@@ -349,6 +356,7 @@ def sweep_result(
     )
     true_tips = np.array([s.true_tip for s in samples])
     nearest, _ = probe_scene.closest_points_in_world(true_tips)
+    contacts, found = _touched_or_nearest(samples, nearest)
     return SweepResult(
         plane=plane,
         points_in_world=points,
@@ -357,8 +365,9 @@ def sweep_result(
         p_index=p_index,
         sides=tuple(sides),
         true_tip_centres_in_world=true_tips,
-        true_contact_points_in_world=_touched_or_nearest(samples, nearest),
+        true_contact_points_in_world=contacts,
         mesh_points_in_world=nearest,
+        contact_found=found,
         stylus_contacts=np.array([s.stylus_contacts for s in samples], dtype=np.int64),
         reading_times_s=np.array([s.estimate.reading.time_s for s in samples]),
     )

@@ -8,7 +8,13 @@ import trimesh
 
 from recognition import DataCurves
 from recognition.rigid import pose_matrix
-from tactile_sim.errors import SimulationError, SweepTruncated, UnreachablePoint, WorkspaceLimit
+from tactile_sim.errors import (
+    SimulationError,
+    SweepTruncated,
+    UnreachablePoint,
+    UnusableCurves,
+    WorkspaceLimit,
+)
 from tactile_sim.probing import ProbeScene, StopReason, build_probe_scene, probe_object
 from tactile_sim.probing.placement import MOUNT_IN_WORLD
 
@@ -136,3 +142,14 @@ def test_sweeps_that_keep_too_few_points_raise_sweep_truncated() -> None:
             T_world_from_object=AT_MOUNT,
             progress=False,
         )
+
+
+def test_curves_recognition_cannot_use_are_replanned_or_named() -> None:
+    # At 0.05 mm spacing on the sphere, here the sensed curves 0 and 2 run parallel at p:
+    # an automatic p is planned again; a given one is refused, saying why.
+    seed, settings = 1080427897, {"n_points": 41, "spacing_m": 0.05e-3, "progress": False}
+    session = probe_object("sphere", seed=seed, **settings)
+    assert isinstance(session.curves, DataCurves)
+    p = [0.0023077185884982643, -0.016780459432061995, 0.0613177107253435]
+    with pytest.raises(UnusableCurves, match="parallel tangents"):
+        probe_object("sphere", seed=seed, point=p, **settings)
