@@ -81,6 +81,13 @@ def parse_args(argv: list[str] | None = None) -> BenchmarkConfig:
         "sensing (sensed points against the meshes, wall times)",
     )
     p.add_argument("--sessions", type=int, default=3, help="with --source sim: seeds per object")
+    p.add_argument(
+        "--first-session",
+        type=int,
+        default=0,
+        help="with --source sim: index of each object's first session (e.g. 3 with "
+        "--sessions 5: sessions 3-7)",
+    )
     p.add_argument("--object", action="append", help="with --source sim: probe only these")
     p.add_argument(
         "--sim-curves",
@@ -105,8 +112,8 @@ def parse_args(argv: list[str] | None = None) -> BenchmarkConfig:
         p.error("--sim-spacing-mm must lie in (0, 20)")
     if not 0 <= a.model_error_mm < 5:
         p.error("--model-error-mm must lie in [0, 5)")
-    if a.sessions < 1:
-        p.error("--sessions must be at least 1")
+    if a.sessions < 1 or a.first_session < 0:
+        p.error("--sessions must be at least 1 and --first-session at least 0")
     if a.source == "sim" and (a.mesh_dir is not None or a.sweep is not None):
         p.error("--mesh-dir and --sweep apply to --source synthetic only")
     for name in ("per_model", "n_points", "workers"):
@@ -144,6 +151,7 @@ def parse_args(argv: list[str] | None = None) -> BenchmarkConfig:
         sim=SimSettings(
             experiments=tuple(a.experiment) if a.experiment else EXPERIMENTS,
             sessions=a.sessions,
+            first_session=a.first_session,
             objects=tuple(a.object) if a.object else None,
             curves=a.sim_curves,
             spacing_mm=a.sim_spacing_mm,

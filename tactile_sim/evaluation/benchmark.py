@@ -245,6 +245,7 @@ def _sim_source(config: BenchmarkConfig, experiment: str) -> SimulatedSource | N
     make = catalog_experiment if experiment == "catalog" else solids_experiment
     source = make(
         sessions_per_object=sim.sessions,
+        first_session=sim.first_session,
         curves=sim.curves,
         seed=sim.seed,
         model_error_m=sim.model_error_mm * 1e-3,

@@ -250,6 +250,8 @@ class SimSettings:
         three objects, and warm wall times of a session and of ``scripts/probe.py``).
     sessions : int
         Probing sessions (seeds) per object.
+    first_session : int
+        Index of each object's first session (later sessions without the earlier ones).
     objects : tuple of str or None
         Probe only these objects.
     curves : {"sensed", "true_contacts"}
@@ -267,6 +269,7 @@ class SimSettings:
 
     experiments: tuple[str, ...] = EXPERIMENTS
     sessions: int = 3
+    first_session: int = 0
     objects: tuple[str, ...] | None = None
     curves: str = "sensed"
     spacing_mm: float | None = None

@@ -53,13 +53,19 @@ SESSION_HEADER = [
 ]
 
 
+def _session_range(source: SimulatedSource) -> str:
+    last = source.first_session + source.sessions_per_object - 1
+    return f"sessions {source.first_session}-{last}" if last > 0 else "session 0"
+
+
 def _header(run: RunInfo, title: str, source: SimulatedSource, records_path: str) -> list[str]:
     other = "true contact" if source.curves == "sensed" else "sensed"
     return [
         *run.header(title),
         f"Probing: {len(source.objects)} objects x {source.sessions_per_object} sessions "
-        f"(seeds from --seed {source.seed}); {source.n_points} points per curve at "
-        f"d = {source.spacing_m * 1e3:g} mm, planes {source.plane_angle_deg:g} deg apart; "
+        f"({_session_range(source)}, seeds from --seed {source.seed}); "
+        f"{source.n_points} points per curve at d = {source.spacing_m * 1e3:g} mm, "
+        f"planes {source.plane_angle_deg:g} deg apart; "
         f"recognised from the {source.curves.replace('_', ' ')} points, and from the "
         f"{other} points of the same session as the reference. Records: `{records_path}`.",
         "",

@@ -64,6 +64,10 @@ class SimulatedSource:
         Catalog or solid names.
     sessions_per_object : int
         Sessions (instances) per object.
+    first_session : int
+        Index of each object's first session (sessions ``first_session`` to
+        ``first_session + sessions_per_object - 1``: later sessions of the same
+        experiment, without the earlier ones).
     n_points : int
         Points per curve, p included (thesis: 21 on the free-form objects, 41 on the
         solids).
@@ -90,6 +94,7 @@ class SimulatedSource:
 
     objects: tuple[str, ...] = field(default_factory=object_names)
     sessions_per_object: int = 3
+    first_session: int = 0
     n_points: int = 21
     spacing_m: float = 1.2e-3
     plane_angle_deg: float = 60.0
@@ -108,8 +113,11 @@ class SimulatedSource:
                 raise UnknownObject(name, known)
         if self.curves not in _CURVES:
             raise ValueError(f"curves must be one of {_CURVES}, got {self.curves!r}")
-        if self.sessions_per_object < 1:
-            raise ValueError(f"sessions_per_object must be >= 1, got {self.sessions_per_object}")
+        if self.sessions_per_object < 1 or self.first_session < 0:
+            raise ValueError(
+                f"sessions_per_object must be >= 1 and first_session >= 0, got "
+                f"{self.sessions_per_object} and {self.first_session}"
+            )
 
     def specs(self, database: object = None) -> list[InstanceSpec]:
         """Returns the instance specs: ``sessions_per_object`` per object, in order.
@@ -119,7 +127,7 @@ class SimulatedSource:
         return [
             InstanceSpec(name, k, None, session_seed(self.seed, name, k))
             for name in self.objects
-            for k in range(self.sessions_per_object)
+            for k in range(self.first_session, self.first_session + self.sessions_per_object)
         ]
 
     def instance(self, database: object, spec: InstanceSpec) -> Instance:
