@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
 import tempfile
@@ -9,7 +10,9 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import IO, Any
 
-__all__ = ["write_atomic", "write_json_atomic"]
+import numpy as np
+
+__all__ = ["array_checksum", "write_atomic", "write_json_atomic"]
 
 
 def write_atomic(path: str | os.PathLike[str], writer: Callable[[IO[bytes]], object]) -> Path:
@@ -35,3 +38,13 @@ def write_json_atomic(path: str | os.PathLike[str], payload: Any, indent: int = 
     """Writes ``payload`` as JSON to ``path`` atomically (:func:`write_atomic`)."""
     text = json.dumps(payload, indent=indent) + "\n"
     return write_atomic(path, lambda f: f.write(text.encode()))
+
+
+def array_checksum(arrays: dict[str, np.ndarray]) -> str:
+    """Hex SHA-256 of the named arrays' dtypes, shapes and bytes, in name order."""
+    digest = hashlib.sha256()
+    for name in sorted(arrays):
+        array = np.ascontiguousarray(arrays[name])
+        digest.update(f"{name}:{array.dtype.str}:{array.shape};".encode())
+        digest.update(array.tobytes())
+    return digest.hexdigest()

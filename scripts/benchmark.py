@@ -105,7 +105,8 @@ def parse_args(argv: list[str] | None = None) -> BenchmarkConfig:
         type=float,
         default=0.0,
         help="with --source sim: each probed object displaced from its model along the "
-        "normals by a smooth random field of this RMS, mm (default 0)",
+        "normals by a smooth random field of this RMS, mm, and the fast mode told so "
+        "(default 0)",
     )
     a = p.parse_args(argv)
     if a.sim_spacing_mm is not None and not 0 < a.sim_spacing_mm < 20:
@@ -137,6 +138,7 @@ def parse_args(argv: list[str] | None = None) -> BenchmarkConfig:
             methods=tuple(a.method) if a.method else METHODS,
             delta_per_mm=a.delta,
             thesis_instances=a.thesis_instances,
+            model_mismatch_mm=a.model_error_mm,
         ),
         meshes=MeshSettings(mesh_dir=a.mesh_dir, units=a.units),
         run=RunSettings(

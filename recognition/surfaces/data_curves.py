@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import os
+import zipfile
+import zlib
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -11,7 +13,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from recognition.errors import DegenerateGeometry, InvalidCurveData
-from recognition.files import write_atomic
+from recognition.files import array_checksum, write_atomic
 
 __all__ = ["DataCurves", "closest_points_between_polylines"]
 
@@ -233,27 +235,46 @@ class DataCurves:
             arrays["approach"] = self.approach
         for i, n in enumerate(self.normals or ()):
             arrays[f"normals_{i}"] = n
+        arrays["digest"] = np.array(array_checksum(arrays))
         return write_atomic(path, lambda f: np.savez(f, allow_pickle=False, **arrays))
 
     @classmethod
     def load(cls, path: str | os.PathLike[str]) -> DataCurves:
-        """Read curves written by :meth:`save`."""
+        """Read curves written by :meth:`save` (or any .npz of ``curve_0``, ``curve_1``, ...
+        arrays, with optional ``approach``, ``meet_tolerance_m`` and ``normals_i``).
+
+        Raises
+        ------
+        InvalidCurveData
+            The file cannot be read, is damaged (its arrays do not match the digest
+            :meth:`save` stored with them), or holds no valid data curves.
+        """
         path = Path(path)
         try:
             with np.load(path, allow_pickle=False) as z:
-                keys = sorted(
-                    (k for k in z.files if k.startswith("curve_")),
-                    key=lambda k: int(k.split("_")[1]),
-                )
-                curves = tuple(z[k] for k in keys)
-                tol = float(z["meet_tolerance_m"]) if "meet_tolerance_m" in z.files else None
-                approach = z["approach"] if "approach" in z.files else None
-                normal_keys = [f"normals_{i}" for i in range(len(keys))]
-                normals = (
-                    tuple(z[k] for k in normal_keys)
-                    if all(k in z.files for k in normal_keys)
-                    else None
-                )
-        except (OSError, ValueError, KeyError) as exc:
+                arrays = {k: z[k] for k in z.files}
+        except (OSError, ValueError, EOFError, zipfile.BadZipFile, zlib.error) as exc:
             raise InvalidCurveData(f"cannot read data curves from {path}: {exc}") from exc
-        return cls(curves, tol if tol is not None else MEET_TOLERANCE_M, approach, normals)
+        digest = arrays.pop("digest", None)
+        if digest is not None and str(digest) != array_checksum(arrays):
+            raise InvalidCurveData(
+                f"{path} is damaged: its arrays do not match the digest saved with them"
+            )
+        keys = []
+        while f"curve_{len(keys)}" in arrays:
+            keys.append(f"curve_{len(keys)}")
+        if len(keys) < 3:
+            raise InvalidCurveData(
+                f"{path} holds {len(keys)} data curves (arrays curve_0, curve_1, ...); "
+                "expected three or more"
+            )
+        try:
+            tol = float(arrays.get("meet_tolerance_m", MEET_TOLERANCE_M))
+        except (TypeError, ValueError) as exc:
+            raise InvalidCurveData(f"{path}: meet_tolerance_m is not a number") from exc
+        normal_keys = [f"normals_{i}" for i in range(len(keys))]
+        normals = (
+            tuple(arrays[k] for k in normal_keys) if all(k in arrays for k in normal_keys) else None
+        )
+        curves = tuple(arrays[k] for k in keys)
+        return cls(curves, tol, arrays.get("approach"), normals)

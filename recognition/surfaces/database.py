@@ -2,23 +2,18 @@
 
 from __future__ import annotations
 
-import functools
-import json
 import os
 import time
 from collections.abc import Mapping
-from dataclasses import asdict
 from pathlib import Path
-from typing import IO, Any
 
 import numpy as np
 import trimesh
 
 from recognition.errors import InvalidModel
-from recognition.files import write_atomic
 from recognition.surfaces.data_curves import DataCurves
-from recognition.surfaces.distance import DistanceField, FieldStack
-from recognition.surfaces.lookup import CurvatureTable
+from recognition.surfaces.database_files import DATABASE_FORMAT, read_models, write_models
+from recognition.surfaces.distance import FieldStack
 from recognition.surfaces.mesh_model import MeshModel, MeshModelConfig
 from recognition.surfaces.registration import (
     CONFIGS,
@@ -38,16 +33,9 @@ __all__ = ["DATABASE_FORMAT", "MeshRegistrationConfig", "ModelDatabase", "Recogn
 MeshRegistrationConfig = FastConfig | ThesisConfig | IcpConfig
 """The settings of a registration mode on mesh models."""
 
-#: Version of the on-disk format; a different version is rebuilt, never read.
-DATABASE_FORMAT = 5
 #: Default largest registration error (metres) of a recognised model: data that fit no
 #: model better than this are not recognised (name None).
 MAX_ERROR_M = 0.5e-3
-
-
-def _savez(f: IO[bytes], arrays: dict[str, np.ndarray]) -> None:
-    # uncompressed: a database loads at the speed of the disk, not of zlib
-    np.savez(f, allow_pickle=False, **arrays)
 
 
 class ModelDatabase:
@@ -134,48 +122,9 @@ class ModelDatabase:
     # --- persistence ------------------------------------------------------------------
 
     def save(self, directory: str | os.PathLike[str]) -> Path:
-        """Write every model (mesh, table, distance field) as .npz and a JSON manifest.
-
-        Files are written atomically; the manifest records each model's mesh hash and
-        table settings so that :meth:`load` can refuse a stale or corrupt file.
-        """
-        directory = Path(directory)
-        models: dict[str, dict[str, Any]] = {}
-        manifest: dict[str, object] = {"format": DATABASE_FORMAT, "models": models}
-        for name, model in self.models.items():
-            table, df, dense = model.table, model.distance_field, model.candidate_curvatures
-            assert table.d1 is not None and dense.d1 is not None
-            file = f"{_safe(name)}.npz"
-            arrays = {
-                "vertices": model.vertices,
-                "faces": model.faces,
-                "normals": model.normals,
-                "table_vertex": table.site,
-                "table_k1": table.k1,
-                "table_k2": table.k2,
-                "table_d1": table.d1,
-                "vertex_index": dense.site,
-                "vertex_k1": dense.k1.astype(np.float32),
-                "vertex_k2": dense.k2.astype(np.float32),
-                "vertex_d1": dense.d1.astype(np.float32),
-                "field_origin": df.origin,
-                "field_voxel": np.array(df.voxel),
-                "field_band": np.array(df.band),
-                "field_values": df.values,
-            }
-
-            write_atomic(directory / file, functools.partial(_savez, arrays=arrays))
-            models[name] = {
-                "file": file,
-                "mesh_hash": model.hash,
-                "config": _config_json(model.config),
-                "timings_s": model.timings,
-            }
-        write_atomic(
-            directory / "manifest.json",
-            lambda f: f.write(json.dumps(manifest, indent=2).encode()),
-        )
-        return directory
+        """Write every model (mesh, tables, distance field) as .npz and a manifest of their
+        digests (:mod:`~recognition.surfaces.database_files`), each file atomically."""
+        return write_models(list(self.models.values()), Path(directory))
 
     @classmethod
     def load(
@@ -185,61 +134,16 @@ class ModelDatabase:
         registration: MeshRegistrationConfig = FastConfig(),
         config: MeshModelConfig | None = None,
     ) -> ModelDatabase:
-        """Read a database written by :meth:`save`.
+        """Read a database written by :meth:`save`, verified whole.
 
-        Raises :class:`~recognition.errors.InvalidModel` when the directory is missing,
-        written in another format, corrupt, its mesh hash does not match its content, or
-        (with ``config``) it was built with other table settings.
+        Raises :class:`~recognition.errors.InvalidModel` when the folder holds no
+        database, or one of another format, damaged in any way, referring outside the
+        folder, or (with ``config``) built with other table settings; the message names
+        the file.
         """
         directory = Path(directory)
-        try:
-            manifest = json.loads((directory / "manifest.json").read_text())
-        except (OSError, ValueError) as exc:
-            raise InvalidModel(f"no readable model database in {directory}: {exc}") from exc
-        if manifest.get("format") != DATABASE_FORMAT:
-            raise InvalidModel(
-                f"model database in {directory} has format {manifest.get('format')!r}; "
-                f"expected {DATABASE_FORMAT}: rebuild it"
-            )
-        models = {}
-        for name, entry in manifest["models"].items():
-            model_config = MeshModelConfig(**_config_from_json(entry["config"]))
-            if config is not None and model_config != config:
-                raise InvalidModel(f"{name}: built with other table settings; rebuild it")
-            try:
-                with np.load(directory / entry["file"], allow_pickle=False) as z:
-                    a = {k: z[k] for k in z.files}
-            except (OSError, ValueError, KeyError) as exc:
-                raise InvalidModel(f"{name}: cannot read {entry['file']}: {exc}") from exc
-            mesh = trimesh.Trimesh(a["vertices"], a["faces"], process=False)
-            table = CurvatureTable(a["table_vertex"], a["table_k1"], a["table_k2"], a["table_d1"])
-            df = DistanceField(
-                a["field_origin"],
-                float(a["field_voxel"]),
-                a["field_values"],
-                float(a["field_band"]),
-            )
-            dense = CurvatureTable(
-                a["vertex_index"],
-                a["vertex_k1"].astype(float),
-                a["vertex_k2"].astype(float),
-                a["vertex_d1"].astype(float),
-            )
-            model = MeshModel(
-                name,
-                mesh,
-                model_config,
-                table,
-                df,
-                validate=False,
-                candidate_curvatures=dense,
-                normals=a["normals"],
-            )
-            if model.hash != entry["mesh_hash"]:
-                raise InvalidModel(f"{name}: mesh content does not match its hash; rebuild it")
-            model.timings.update(entry.get("timings_s", {}))
-            models[name] = model
-        database = cls(models, registration).prepare()
+        models = read_models(directory, config)
+        database = cls({m.name: m for m in models}, registration).prepare()
         database.directory = directory
         return database
 
@@ -299,22 +203,3 @@ class ModelDatabase:
         if not isinstance(config, FastConfig | ThesisConfig | IcpConfig):
             raise InvalidModel(f"mode {mode!r} does not register mesh models")
         return config
-
-
-def _safe(name: str) -> str:
-    """``name`` with every character but letters, digits, '-' and '_' replaced by '_'."""
-    return "".join(ch if ch.isalnum() or ch in "-_" else "_" for ch in name)
-
-
-def _config_json(config: MeshModelConfig) -> dict[str, Any]:
-    """The config as JSON-ready values (the fit sizes as a list)."""
-    d = asdict(config)
-    d["fit_sizes"] = list(d["fit_sizes"])
-    return d
-
-
-def _config_from_json(d: dict[str, Any]) -> dict[str, Any]:
-    """The keyword arguments of a :class:`MeshModelConfig` read back from JSON."""
-    d = dict(d)
-    d["fit_sizes"] = tuple(d["fit_sizes"])
-    return d

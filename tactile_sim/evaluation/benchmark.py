@@ -142,7 +142,7 @@ def run(config: BenchmarkConfig, *, echo: Echo = print) -> dict[str, Any]:
     """
     if config.source == "sim":
         return run_sim(config, echo=echo)
-    database, name = benchmark_database(config.meshes, echo=echo)
+    database, name = benchmark_database(config.meshes)
     started = time.strftime("%Y-%m-%d %H:%M")
     if config.sweep:
         return run_sweep(config, database, name, started, echo=echo)

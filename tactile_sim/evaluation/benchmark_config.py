@@ -11,10 +11,10 @@ from __future__ import annotations
 
 import os
 import shlex
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
-from recognition import RegistrationConfig, config_for
+from recognition import FastConfig, RegistrationConfig, config_for
 from recognition.evaluation import SyntheticSource
 from tactile_sim.objects import OBJECT_NAMES
 
@@ -147,16 +147,24 @@ class MethodSettings:
         Table-lookup tolerance (thesis: 0.03 1/mm).
     thesis_instances : int
         Instances run in thesis mode (it takes about a minute each); 0 for all.
+    model_mismatch_mm : float
+        How far the fast mode takes the objects to differ from their models (RMS, mm:
+        :attr:`recognition.FastConfig.model_mismatch_m`): the experimenter's knowledge
+        of the model's accuracy, as of the sensor's noise.
     """
 
     methods: tuple[str, ...] = METHODS
     delta_per_mm: float = 0.03
     thesis_instances: int = 20
+    model_mismatch_mm: float = 0.0
 
     def config(self, method: str = "fast", delta_per_mm: float | None = None) -> RegistrationConfig:
         """The registration of ``method`` (``delta_per_mm`` replaced in a sweep)."""
         delta = self.delta_per_mm if delta_per_mm is None else delta_per_mm
-        return config_for(method, delta=delta * 1e3)
+        config = config_for(method, delta=delta * 1e3)
+        if isinstance(config, FastConfig) and self.model_mismatch_mm:
+            config = replace(config, model_mismatch_m=self.model_mismatch_mm * 1e-3)
+        return config
 
     def configs(self) -> dict[str, RegistrationConfig]:
         """The registration per method, in the order of ``methods``."""

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import hashlib
-from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -16,9 +15,7 @@ __all__ = ["MESH_SUFFIXES", "benchmark_database"]
 MESH_SUFFIXES = (".obj", ".ply", ".stl")
 
 
-def benchmark_database(
-    meshes: MeshSettings, *, echo: Callable[[str], object] = print
-) -> tuple[ModelDatabase, str]:
+def benchmark_database(meshes: MeshSettings) -> tuple[ModelDatabase, str]:
     """The catalog's database, or one built from ``meshes.mesh_dir`` (cached), and its name.
 
     A mesh directory's database is kept under ``meshes.cache_dir`` by a hash of the
@@ -30,9 +27,9 @@ def benchmark_database(
         The directory holds no mesh, or a mesh is not a usable model (e.g. millimetres
         read as metres).
     """
-    if meshes.mesh_dir is None:
-        from tactile_sim.objects.database import catalog_database
+    from tactile_sim.objects.database import cached_database, catalog_database
 
+    if meshes.mesh_dir is None:
         return catalog_database(), "catalog"
     import trimesh
 
@@ -47,15 +44,14 @@ def benchmark_database(
         digest.update(p.read_bytes())
     digest.update(str(scale).encode())
     directory = Path(meshes.cache_dir) / digest.hexdigest()[:16]
-    try:
-        return ModelDatabase.load(directory), mesh_dir.name
-    except RecognitionError:
-        pass
-    models: dict[str, Any] = {}
-    for p in files:
-        mesh = trimesh.load(p, force="mesh")
-        mesh.apply_scale(scale)
-        models[p.stem] = mesh
-    echo(f"building a database of {len(models)} meshes from {mesh_dir}")
-    ModelDatabase.from_meshes(models, progress=True).save(directory)
-    return ModelDatabase.load(directory), mesh_dir.name
+
+    def build() -> ModelDatabase:
+        models: dict[str, Any] = {}
+        for p in files:
+            mesh = trimesh.load(p, force="mesh")
+            mesh.apply_scale(scale)
+            models[p.stem] = mesh
+        return ModelDatabase.from_meshes(models, progress=True)
+
+    what = f"a database of {len(files)} meshes from {mesh_dir}"
+    return cached_database(directory, build, what), mesh_dir.name

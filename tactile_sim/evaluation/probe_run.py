@@ -9,7 +9,7 @@ recording (.rrd) are saved.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -51,7 +51,8 @@ class ProbeRunConfig:
     model_error_mm : float
         RMS (mm) of a smooth random displacement of the probed object from its model
         along the normals, seeded by ``seed`` (:func:`~tactile_sim.probing.displaced_target`):
-        the object differs from the database's model as a real one from its scan. 0: none.
+        the object differs from the database's model as a real one from its scan, and
+        recognition is told so (:attr:`recognition.FastConfig.model_mismatch_m`). 0: none.
     model_error_correlation_mm : float
         Correlation length of that displacement, mm.
     json_path : Path or None
@@ -112,6 +113,7 @@ def probe_run(config: ProbeRunConfig) -> dict[str, Any]:
     PortInUse, RecordingError
         The viewer cannot be served or shown (checked before probing).
     """
+    from recognition import FastConfig
     from tactile_sim.errors import UnknownObject
     from tactile_sim.objects import object_names
     from tactile_sim.objects.database import catalog_database
@@ -144,7 +146,10 @@ def probe_run(config: ProbeRunConfig) -> dict[str, Any]:
         trajectory_hz=None if config.rerun == "off" else config.trajectory_hz,
     )
     probed = time.perf_counter()
-    result = database.recognize(session.curves)
+    registration = database.registration
+    if isinstance(registration, FastConfig):
+        registration = replace(registration, model_mismatch_m=displacement.rms_m)
+    result = database.recognize(session.curves, registration)
     recognized = time.perf_counter()
 
     truth = session.ground_truth

@@ -14,9 +14,9 @@ from other inputs is rebuilt, never trusted.
 from __future__ import annotations
 
 import contextlib
-import hashlib
 import json
 import os
+import sys
 import zipfile
 import zlib
 from collections.abc import Iterator
@@ -25,7 +25,7 @@ from typing import Any
 
 import numpy as np
 
-from recognition.files import write_atomic
+from recognition.files import array_checksum, write_atomic
 
 __all__ = [
     "ENV_ASSETS_DIR",
@@ -61,16 +61,6 @@ def generated_dir(kind: str) -> Path:
     return path
 
 
-def array_checksum(arrays: dict[str, np.ndarray]) -> str:
-    """Hex SHA-256 of the named arrays' dtypes, shapes and bytes, in name order."""
-    digest = hashlib.sha256()
-    for name in sorted(arrays):
-        array = np.ascontiguousarray(arrays[name])
-        digest.update(f"{name}:{array.dtype.str}:{array.shape};".encode())
-        digest.update(array.tobytes())
-    return digest.hexdigest()
-
-
 def write_npz_atomic(path: Path, arrays: dict[str, np.ndarray], meta: dict[str, Any]) -> None:
     """Write arrays and a JSON metadata dict (plus the arrays' checksum) to ``path`` atomically.
 
@@ -83,25 +73,42 @@ def write_npz_atomic(path: Path, arrays: dict[str, np.ndarray], meta: dict[str, 
     meta : dict
         JSON-serialisable metadata, stored as the string array ``meta``.
     """
+    _REPORTED.discard(path)
     meta = {**meta, "checksum": array_checksum(arrays)}
     payload = {**arrays, "meta": np.array(json.dumps(meta, sort_keys=True))}
     write_atomic(path, lambda handle: np.savez_compressed(handle, **payload))
 
 
 def read_npz(path: Path, names: tuple[str, ...]) -> tuple[dict[str, np.ndarray], dict] | None:
-    """Arrays ``names`` and the metadata of a cache file; None if missing or corrupt.
+    """Arrays ``names`` and the metadata of a cache file; None if missing or damaged.
 
-    A file whose arrays do not match the checksum stored with them counts as corrupt.
+    A file whose arrays do not match the checksum stored with them is damaged; a damaged
+    file is reported in one line on stderr (the caller builds it again).
     """
     try:
         with np.load(path, allow_pickle=False) as data:
             arrays = {name: data[name] for name in names}
             meta = json.loads(str(data["meta"]))
-    except (OSError, KeyError, ValueError, EOFError, zipfile.BadZipFile, zlib.error):
+    except FileNotFoundError:
+        return None
+    except (OSError, KeyError, ValueError, EOFError, zipfile.BadZipFile, zlib.error) as exc:
+        _damaged(path, f"{type(exc).__name__}: {exc}")
         return None
     if not isinstance(meta, dict) or meta.get("checksum") != array_checksum(arrays):
+        _damaged(path, "its arrays do not match their checksum")
         return None
     return arrays, meta
+
+
+#: Damaged files already reported (a cache is read twice around its build lock).
+_REPORTED: set[Path] = set()
+
+
+def _damaged(path: Path, why: str) -> None:
+    if path not in _REPORTED:
+        _REPORTED.add(path)
+        why = " ".join(why.split())
+        print(f"tactile_sim: {path} is damaged ({why}); building it again", file=sys.stderr)
 
 
 def is_triangle_arrays(vertices: np.ndarray, faces: np.ndarray) -> bool:

@@ -9,6 +9,8 @@ from __future__ import annotations
 import hashlib
 import json
 import shutil
+from collections.abc import Callable
+from pathlib import Path
 from typing import TYPE_CHECKING
 
 from tactile_sim.errors import AssetError
@@ -22,54 +24,83 @@ from tactile_sim.objects.catalog import (
 )
 
 if TYPE_CHECKING:
-    from recognition import ModelDatabase
+    from recognition import MeshModelConfig, ModelDatabase
 
-__all__ = ["catalog_database"]
+__all__ = ["cached_database", "catalog_database"]
+
+
+def cached_database(
+    directory: Path,
+    build: Callable[[], ModelDatabase],
+    what: str,
+    *,
+    config: MeshModelConfig | None = None,
+    progress: bool = True,
+) -> ModelDatabase:
+    """The database cached in ``directory``, else ``build()`` saved there and loaded back.
+
+    A missing database is built with a one-line message naming ``what``; one that
+    cannot be used (damaged, of another format, built with other settings) is rebuilt
+    with a one-line notice saying why. Concurrent processes build it once (a lock).
+
+    Raises
+    ------
+    AssetError
+        The database cannot be written.
+    """
+    from recognition import InvalidModel, ModelDatabase
+
+    try:
+        return ModelDatabase.load(directory, config=config)
+    except InvalidModel:
+        pass
+    directory.parent.mkdir(parents=True, exist_ok=True)
+    with build_lock(directory.with_suffix(".lock")):
+        try:
+            return ModelDatabase.load(directory, config=config)
+        except InvalidModel as exc:
+            if progress and directory.exists():
+                print(f"{what}: the cached database cannot be used ({exc}); rebuilding it")
+            elif progress:
+                print(f"building {what} (once; cached in {directory})", flush=True)
+        database = build()
+        tmp = directory.with_name(directory.name + ".tmp")
+        shutil.rmtree(tmp, ignore_errors=True)
+        try:
+            database.save(tmp)
+            shutil.rmtree(directory, ignore_errors=True)
+            tmp.rename(directory)
+        except OSError as exc:
+            raise AssetError(f"cannot write the database to {directory}: {exc}") from exc
+        return ModelDatabase.load(directory, config=config)
 
 
 def catalog_database(*, progress: bool = True) -> ModelDatabase:
     """The :class:`recognition.ModelDatabase` of the ten catalog objects.
 
     Cached under ``assets/generated/database/<key>``, the key hashing every object's
-    recipe hash, the table settings and the database format; a missing, stale or corrupt
-    cache is rebuilt (with a progress bar and a one-line message), never trusted.
+    recipe hash, the table settings and the database format; a missing, stale or damaged
+    cache is rebuilt (with a progress bar and a one-line message), never trusted
+    (:func:`cached_database`).
     """
-    from recognition import DATABASE_FORMAT, InvalidModel, MeshModelConfig, ModelDatabase
+    from recognition import DATABASE_FORMAT, MeshModelConfig, ModelDatabase
 
     config = MeshModelConfig()
     settings = MeshingSettings()
     recipes = {n: cache_key(load_object_recipe(n), settings) for n in object_names()}
     payload = json.dumps([sorted(recipes.items()), repr(config), DATABASE_FORMAT])
     key = hashlib.sha256(payload.encode()).hexdigest()[:16]
-    directory = generated_dir("database") / key
-    try:
-        return ModelDatabase.load(directory, config=config)
-    except InvalidModel:
-        pass
-    with build_lock(directory.with_suffix(".lock")):
-        try:
-            return ModelDatabase.load(directory, config=config)
-        except InvalidModel:
-            catalog = load_catalog()
-            if progress:
-                print(
-                    f"building the recognition database of {len(catalog)} objects "
-                    f"(once; cached in {directory})",
-                    flush=True,
-                )
-            database = ModelDatabase.from_meshes(
-                {name: obj.mesh for name, obj in catalog.items()},
-                config=config,
-                progress=progress,
-            )
-            tmp = directory.with_name(directory.name + ".tmp")
-            shutil.rmtree(tmp, ignore_errors=True)
-            try:
-                database.save(tmp)
-                shutil.rmtree(directory, ignore_errors=True)
-                tmp.rename(directory)
-            except OSError as exc:
-                raise AssetError(
-                    f"cannot write the recognition database to {directory}: {exc}"
-                ) from exc
-            return ModelDatabase.load(directory, config=config)
+
+    def build() -> ModelDatabase:
+        catalog = load_catalog()
+        return ModelDatabase.from_meshes(
+            {name: obj.mesh for name, obj in catalog.items()}, config=config, progress=progress
+        )
+
+    return cached_database(
+        generated_dir("database") / key,
+        build,
+        f"the recognition database of the {len(recipes)} catalog objects",
+        config=config,
+        progress=progress,
+    )

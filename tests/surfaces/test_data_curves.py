@@ -169,3 +169,23 @@ def test_normals_are_validated_made_unit_moved_and_saved(tmp_path):
     for a, b in zip(data.normals, loaded.normals, strict=True):
         np.testing.assert_allclose(a, b, atol=1e-15)
     assert DataCurves.load(DataCurves(curves).save(tmp_path / "none.npz")).normals is None
+
+
+def test_damaged_or_foreign_curve_files_are_typed_errors(tmp_path):
+    path = DataCurves(three(), approach=[0.0, 0.0, -1.0]).save(tmp_path / "c.npz")
+    data = path.read_bytes()
+    (tmp_path / "truncated.npz").write_bytes(data[: len(data) // 2])
+    with pytest.raises(InvalidCurveData, match="cannot read data curves"):
+        DataCurves.load(tmp_path / "truncated.npz")
+    with np.load(path) as z:
+        arrays = {k: z[k] for k in z.files}
+    arrays["curve_1"] = arrays["curve_1"] * 1.001  # edited without its digest
+    np.savez(tmp_path / "edited.npz", **arrays)
+    with pytest.raises(InvalidCurveData, match="damaged"):
+        DataCurves.load(tmp_path / "edited.npz")
+    np.savez(tmp_path / "two.npz", curve_0=three()[0], curve_1=three()[1])
+    with pytest.raises(InvalidCurveData, match="holds 2 data curves"):
+        DataCurves.load(tmp_path / "two.npz")
+    # curves written by another tool (no digest) are read
+    np.savez(tmp_path / "foreign.npz", **{f"curve_{i}": c for i, c in enumerate(three())})
+    assert DataCurves.load(tmp_path / "foreign.npz").n_points == 63

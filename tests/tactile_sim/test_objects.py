@@ -377,7 +377,10 @@ def test_cache_round_trip(tmp_assets: Path, counted_builds: BuildCounter) -> Non
 
 @pytest.mark.parametrize("damage", ["garbage", "truncate", "flip_byte", "empty"])
 def test_corrupt_cache_is_rebuilt(
-    tmp_assets: Path, counted_builds: BuildCounter, damage: str
+    tmp_assets: Path,
+    counted_builds: BuildCounter,
+    damage: str,
+    capsys: pytest.CaptureFixture[str],
 ) -> None:
     recipe = coarse_recipe()
     built = load_or_build(recipe, progress=False)
@@ -397,7 +400,10 @@ def test_corrupt_cache_is_rebuilt(
         arrays["vertices"][0, 0] += 1e-3
         np.savez(path, **arrays)
 
+    capsys.readouterr()
     rebuilt = load_or_build(recipe, progress=False)
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and path.name in err and "damaged" in err
     assert counted_builds.calls == 2
     np.testing.assert_array_equal(rebuilt.mesh.vertices, built.mesh.vertices)
     assert load_or_build(recipe, progress=False).recipe_hash == built.recipe_hash
