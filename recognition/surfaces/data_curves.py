@@ -260,7 +260,7 @@ class DataCurves:
             raise InvalidCurveData(
                 f"{path} is damaged: its arrays do not match the digest saved with them"
             )
-        keys = []
+        keys: list[str] = []
         while f"curve_{len(keys)}" in arrays:
             keys.append(f"curve_{len(keys)}")
         if len(keys) < 3:
