@@ -11,6 +11,7 @@ The registration settings are one frozen config per mode (``FastConfig``,
 
 from recognition.errors import (
     DegenerateGeometry,
+    InvalidArgument,
     InvalidCurveData,
     InvalidModel,
     NoRealSolution,
@@ -36,6 +37,7 @@ __all__ = [
     "DegenerateGeometry",
     "FastConfig",
     "IcpConfig",
+    "InvalidArgument",
     "InvalidCurveData",
     "InvalidModel",
     "MeshModelConfig",

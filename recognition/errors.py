@@ -2,6 +2,7 @@
 
 __all__ = [
     "DegenerateGeometry",
+    "InvalidArgument",
     "InvalidCurveData",
     "InvalidModel",
     "NoRealSolution",
@@ -27,3 +28,8 @@ class NoRealSolution(RecognitionError, ArithmeticError):
 
 class InvalidModel(RecognitionError, ValueError):
     """A model mesh that cannot be used: open, several components, implausible size."""
+
+
+class InvalidArgument(RecognitionError, ValueError):
+    """An argument of a library call lies outside its domain (a NaN or negative threshold,
+    an unknown model name, an empty selection)."""

@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+from scipy.spatial import cKDTree
 
 from recognition.errors import DegenerateGeometry, InvalidCurveData
 from recognition.files import array_checksum, write_atomic
@@ -25,6 +26,35 @@ MEET_TOLERANCE_M = 1.0e-3
 MIN_TANGENT_ANGLE = np.deg2rad(5.0)
 #: Each curve needs at least this many points.
 MIN_POINTS = 5
+#: Coordinates beyond this (metres) are not tactile data in metres.
+MAX_COORDINATE_M = 1.0e3
+#: A curve more than this fraction of whose points lie nearest a point more than two
+#: places away along it is not in order (noise and a few outliers leave most points next
+#: to their neighbours, a third of them at worst on the robot's 0.05 mm sweeps; shuffled
+#: points are next to strangers).
+MAX_UNORDERED = 0.5
+
+
+def _real_array(value: ArrayLike, label: str) -> Array:
+    """``value`` as a float array, or an :class:`InvalidCurveData` saying what it is."""
+    if value is None:
+        raise InvalidCurveData(f"{label} is None; expected an array of real numbers")
+    try:
+        raw = np.asarray(value)
+    except (TypeError, ValueError) as exc:
+        raise InvalidCurveData(
+            f"{label} is ragged or holds non-numbers; expected an array of real numbers"
+        ) from exc
+    if raw.dtype == object:
+        raise InvalidCurveData(
+            f"{label} is ragged or holds non-numbers; expected an array of real numbers"
+        )
+    if raw.dtype.kind not in "iuf":
+        kind = {"b": "booleans", "c": "complex numbers", "U": "text", "S": "bytes"}
+        raise InvalidCurveData(
+            f"{label} holds {kind.get(raw.dtype.kind, raw.dtype.name)}; expected real numbers"
+        )
+    return np.array(raw, dtype=float)
 
 
 def closest_points_between_polylines(a: Array, b: Array) -> tuple[Array, Array, float]:
@@ -98,12 +128,22 @@ class DataCurves:
     gap_m: float = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
+        if isinstance(self.curves, str | bytes) or not isinstance(
+            self.curves, Sequence | np.ndarray
+        ):
+            kind = type(self.curves).__name__
+            raise InvalidCurveData(f"curves must be a sequence of (n, 3) point arrays, got {kind}")
         curves = tuple(self._validated(c, i) for i, c in enumerate(self.curves))
         if len(curves) < 3:
             raise InvalidCurveData(f"expected three data curves (or more), got {len(curves)}")
         object.__setattr__(self, "curves", curves)
+        tolerance = self.meet_tolerance_m
+        if isinstance(tolerance, bool) or not isinstance(tolerance, int | float | np.floating):
+            raise InvalidCurveData(f"meet_tolerance_m must be a number, got {tolerance!r}")
+        if not (np.isfinite(tolerance) and tolerance > 0):
+            raise InvalidCurveData(f"meet_tolerance_m must be positive and finite, got {tolerance}")
         if self.approach is not None:
-            v = np.array(self.approach, dtype=float).reshape(-1)
+            v = _real_array(self.approach, "approach").reshape(-1)
             if v.shape != (3,) or not np.all(np.isfinite(v)) or not np.linalg.norm(v) > 0:
                 raise InvalidCurveData(f"approach must be a finite non-zero 3-vector, got {v}")
             object.__setattr__(self, "approach", v / np.linalg.norm(v))
@@ -117,9 +157,16 @@ class DataCurves:
                 pairs += [pa, pb]
                 gap = max(gap, d)
         if not gap <= self.meet_tolerance_m:
+            extent = float(np.ptp(np.concatenate(curves), axis=0).max())
+            hint = (
+                f"; the points span {extent:.3g} m: they look like millimetres, and "
+                "DataCurves expects metres"
+                if extent > 1.0
+                else ""
+            )
             raise InvalidCurveData(
                 f"the curves do not meet at one point: they pass {gap * 1e3:.3g} mm apart, "
-                f"expected at most {self.meet_tolerance_m * 1e3:.3g} mm"
+                f"expected at most {self.meet_tolerance_m * 1e3:.3g} mm{hint}"
             )
         object.__setattr__(self, "intersection", np.mean(pairs, axis=0))
         object.__setattr__(self, "gap_m", float(gap))
@@ -127,7 +174,7 @@ class DataCurves:
 
     @staticmethod
     def _validated(curve: ArrayLike, index: int) -> Array:
-        c = np.array(curve, dtype=float)
+        c = _real_array(curve, f"curve {index}")
         if c.ndim != 2 or c.shape[1] != 3:
             raise InvalidCurveData(f"curve {index} must be an (n, 3) array, got shape {c.shape}")
         if c.shape[0] < MIN_POINTS:
@@ -136,10 +183,24 @@ class DataCurves:
             )
         if not np.all(np.isfinite(c)):
             raise InvalidCurveData(f"curve {index} has NaN or infinite coordinates")
-        step = np.linalg.norm(np.diff(c, axis=0), axis=1)
+        if np.abs(c).max() > MAX_COORDINATE_M:
+            raise InvalidCurveData(
+                f"curve {index} has a coordinate of {np.abs(c).max():.3g} m; expected points "
+                f"within {MAX_COORDINATE_M:g} m of the origin, in metres"
+            )
+        steps = np.diff(c, axis=0)
+        step = np.linalg.norm(steps, axis=1)
         if np.any(step <= 1e-9 * max(float(np.median(step)), 1e-300)):
             raise InvalidCurveData(
                 f"curve {index} repeats a point; expected distinct points in order"
+            )
+        _, nearest = cKDTree(c).query(c, k=2)
+        far = np.abs(nearest[:, 1] - np.arange(len(c))) > 2
+        if np.mean(far) > MAX_UNORDERED:
+            raise InvalidCurveData(
+                f"curve {index} is not in order along the curve: {np.count_nonzero(far)} of its "
+                f"{len(c)} points lie nearest a point more than two places away; expected the "
+                "points ordered along the curve"
             )
         c.setflags(write=False)
         return c
@@ -148,10 +209,9 @@ class DataCurves:
     def _validated_normals(
         normals: Sequence[ArrayLike], curves: tuple[Array, ...]
     ) -> tuple[Array, ...]:
-        try:
-            arrays = tuple(np.array(n, dtype=float) for n in normals)
-        except (TypeError, ValueError) as exc:
-            raise InvalidCurveData(f"normals must be one (n_i, 3) array per curve: {exc}") from exc
+        if isinstance(normals, str | bytes) or not isinstance(normals, Sequence | np.ndarray):
+            raise InvalidCurveData("normals must be one (n_i, 3) array per curve")
+        arrays = tuple(_real_array(n, f"normals of curve {i}") for i, n in enumerate(normals))
         if len(arrays) != len(curves):
             raise InvalidCurveData(
                 f"expected one normal array per curve ({len(curves)}), got {len(arrays)}"

@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import trimesh
 
-from recognition.errors import InvalidModel
+from recognition.errors import InvalidArgument, InvalidCurveData, InvalidModel
 from recognition.surfaces.data_curves import DataCurves
 from recognition.surfaces.database_files import DATABASE_FORMAT, read_models, write_models
 from recognition.surfaces.distance import FieldStack
@@ -170,14 +170,17 @@ class ModelDatabase:
             table-lookup tolerance and data geometry settings (ignored with
             ``registration``).
         max_error_m : float
-            A best error above this means the curves fit no model: ``name`` is None.
+            A best error above this means the curves fit no model: ``name`` is None. It
+            is a mean distance of the data from the model (4.8), not a test of the
+            shape: over short curves similar shapes fit well within it (over 2 mm, a
+            sphere of 100 mm radius lies within 0.01 mm of one of 33 mm).
         models : list of str, optional
             Restrict recognition to these models.
         """
         start = time.perf_counter()
+        names = self._checked_selection(curves, models, max_error_m)
         config = registration or self._config_of(mode)
         geometry = data_geometry(curves, config.geometry)
-        names = models or self.names
         chosen = [self.models[n] for n in names]
         if isinstance(config, FastConfig):
             index = {n: i for i, n in enumerate(self.names)}
@@ -193,6 +196,32 @@ class ModelDatabase:
             found = register_all(chosen, curves, config, geometry=geometry, threads=self.threads)
         registrations = dict(zip(names, found, strict=True))
         return rank(registrations, geometry, time.perf_counter() - start, max_error_m)
+
+    def _checked_selection(
+        self, curves: object, models: list[str] | None, max_error_m: float
+    ) -> list[str]:
+        """The models to search; typed errors for arguments outside their domains."""
+        if not isinstance(curves, DataCurves):
+            raise InvalidCurveData(
+                f"curves must be a recognition.DataCurves, got {type(curves).__name__}: "
+                "build one with DataCurves((curve_0, curve_1, curve_2))"
+            )
+        if isinstance(max_error_m, bool) or not isinstance(max_error_m, int | float):
+            raise InvalidArgument(f"max_error_m must be a number of metres, got {max_error_m!r}")
+        if not max_error_m > 0:
+            raise InvalidArgument(f"max_error_m must be positive (metres), got {max_error_m}")
+        if models is None:
+            return list(self.names)
+        if isinstance(models, str) or not len(models):
+            raise InvalidArgument(
+                f"models must be a non-empty list of model names (None: all), got {models!r}"
+            )
+        unknown = [n for n in models if n not in self.models]
+        if unknown:
+            raise InvalidArgument(
+                f"unknown models {unknown}; the database holds {', '.join(self.names)}"
+            )
+        return list(models)
 
     def _config_of(self, mode: RegistrationMode | str | None) -> MeshRegistrationConfig:
         """The database's registration, or ``mode``'s with the database's shared fields."""

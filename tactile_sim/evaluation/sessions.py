@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from recognition import DataCurves
+from recognition import DataCurves, RecognitionError
 from recognition.evaluation import Instance, InstanceSpec
 from recognition.rigid import apply_pose
 from recognition.surfaces.distance import MeshDistance
@@ -167,9 +167,12 @@ class SimulatedSource:
         except SimulationError as exc:
             return Instance(None, None, {"error": f"{type(exc).__name__}: {exc}"})
         truth = session.ground_truth
-        true_curves = DataCurves(
-            curves=truth.true_contact_points_in_world, approach=session.curves.approach
-        )
+        try:
+            true_curves: DataCurves | None = DataCurves(
+                curves=truth.true_contact_points_in_world, approach=session.curves.approach
+            )
+        except RecognitionError as exc:  # MuJoCo's contacts need not make data curves
+            true_curves, reference_error = None, f"{type(exc).__name__}: {exc}"
         sensed_error = np.concatenate(
             [
                 np.linalg.norm(s.points_in_world - s.true_contact_points_in_world, axis=1)
@@ -182,7 +185,8 @@ class SimulatedSource:
             else MeshDistance(target.mesh.vertices, target.mesh.faces)
         )
         T_object_from_world = np.linalg.inv(truth.T_world_from_object)
-        contact_error = surface.closest(apply_pose(T_object_from_world, true_curves.points))[0]
+        contacts = np.concatenate(truth.true_contact_points_in_world)
+        contact_error = surface.closest(apply_pose(T_object_from_world, contacts))[0]
         sensed_off_mesh = surface.closest(apply_pose(T_object_from_world, session.curves.points))[0]
         steps = np.concatenate(
             [np.linalg.norm(np.diff(s.points_in_world, axis=0), axis=1) for s in session.sweeps]
@@ -203,9 +207,14 @@ class SimulatedSource:
             "spacing_std_mm": float(steps.std() * 1e3),
             "model_error_rms_mm": target.model_error_rms_m * 1e3,
         }
+        if true_curves is None:
+            info["reference_error"] = reference_error
+            if self.curves != "sensed":
+                return Instance(None, None, info | {"error": reference_error})
         if self.curves == "sensed":
             curves, reference = session.curves, true_curves
         else:
+            assert true_curves is not None
             curves, reference = true_curves, session.curves
         point = data_point_in_object(curves, truth.T_world_from_object)
         return Instance(curves, point, info, reference)
