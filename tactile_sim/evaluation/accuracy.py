@@ -46,8 +46,9 @@ __all__ = [
 PROBE_SCRIPT = Path(__file__).resolve().parents[2] / "scripts" / "probe.py"
 
 
-#: The three errors of a sensed point the sensing report keeps apart.
-ERRORS = ("sensor", "geometry", "total")
+#: The errors of a sensed point the sensing report keeps apart: across the surfaces
+#: (sensor, geometry, total) and along them (lateral).
+ERRORS = ("sensor", "geometry", "total", "lateral")
 
 
 def _stats_mm(values_m: NDArray[np.float64]) -> dict[str, float]:
@@ -68,12 +69,16 @@ class ObjectAccuracy:
     seeds : tuple of int
         Session seeds.
     sensor_m : (n,) float, metres
-        Sensor error: distance of every sensed point from where MuJoCo's contact met the
-        surface the tip touched (the collider).
+        Sensor error: distance of every sensed point from the surface the tip touched
+        (the collider's tangent plane at MuJoCo's contact point, whose normal points to
+        the tip's centre).
     geometry_m : (n,) float, metres
         Geometry error: distance of those contact points from the object's mesh.
     total_m : (n,) float, metres
         Distance of every sensed point from the object's mesh.
+    lateral_m : (n,) float, metres
+        How far each sensed point lies from MuJoCo's contact point along the surface
+        (a displacement along the surface, which moves the point on it, not off it).
     contacts_missing : int
         Readings at which MuJoCo reported no tip contact (the contact point is then the
         mesh point nearest the tip centre).
@@ -90,6 +95,7 @@ class ObjectAccuracy:
     sensor_m: NDArray[np.float64]
     geometry_m: NDArray[np.float64]
     total_m: NDArray[np.float64]
+    lateral_m: NDArray[np.float64]
     contacts_missing: int
     truncated_sweeps: int
     stylus_contacts: int
@@ -157,9 +163,10 @@ def sensing_accuracy(
     """Probes objects (3 sweeps x 21 points at 1.2 mm per session) and measures every
     sensed point against the surface MuJoCo touched and against the object's mesh.
 
-    Three errors are kept apart (:class:`ObjectAccuracy`): the sensor's (sensed point to
-    MuJoCo's contact point), the collider's (contact point to mesh) and their sum (sensed
-    point to mesh), each over the probed regions only. Each object is placed once
+    The errors are kept apart (:class:`ObjectAccuracy`): the sensor's (sensed point to
+    the surface the tip touched), the collider's (MuJoCo's contact point to mesh), their
+    sum (sensed point to mesh), and the sensed point's offset along the surface, each
+    over the probed regions only. Each object is placed once
     (random pose from ``seed``); each session draws its own point p, plane yaw and
     noise.
 
@@ -178,7 +185,8 @@ def sensing_accuracy(
     per_object = []
     for i, name in enumerate(objects):
         probe_scene = build_probe_scene(name, seed=seed + 1000 * i, progress=progress)
-        sensor_m, geometry_m, total_m, seconds, seeds = [], [], [], [], []
+        sensor_m, geometry_m, total_m, lateral_m = [], [], [], []
+        seconds, seeds = [], []
         truncated = stylus = missing = 0
         for k in range(sessions_per_object):
             session_seed = seed + 1000 * i + k
@@ -195,7 +203,12 @@ def sensing_accuracy(
             seeds.append(session_seed)
             for sweep in session.sweeps:
                 contacts = sweep.true_contact_points_in_world
-                sensor_m.append(np.linalg.norm(sweep.points_in_world - contacts, axis=1))
+                normal = sweep.true_tip_centres_in_world - contacts
+                normal /= np.linalg.norm(normal, axis=1, keepdims=True)
+                offset = sweep.points_in_world - contacts
+                across = np.einsum("ij,ij->i", offset, normal)
+                sensor_m.append(np.abs(across))
+                lateral_m.append(np.linalg.norm(offset - across[:, None] * normal, axis=1))
                 geometry_m.append(probe_scene.closest_points_in_world(contacts)[1])
                 total_m.append(probe_scene.closest_points_in_world(sweep.points_in_world)[1])
                 missing += int(np.count_nonzero(~sweep.contact_found))
@@ -208,6 +221,7 @@ def sensing_accuracy(
                 sensor_m=np.concatenate(sensor_m),
                 geometry_m=np.concatenate(geometry_m),
                 total_m=np.concatenate(total_m),
+                lateral_m=np.concatenate(lateral_m),
                 contacts_missing=missing,
                 truncated_sweeps=truncated,
                 stylus_contacts=stylus,

@@ -19,7 +19,6 @@ from recognition.evaluation.reports import (
 from recognition.reproduction.chapter4_closed_form import TABLE_4_5_THESIS, SolidExperiment
 from recognition.reproduction.tables import markdown_table
 from tactile_sim.evaluation.accuracy import (
-    ERRORS,
     SCRIPT_PARTS,
     AccuracyResult,
     TimingResult,
@@ -313,14 +312,24 @@ def sensing_report(
     run, the others warm)."""
     figures = accuracy.summary()
 
+    across = ("sensor", "geometry", "total")
+
     def row(name: str, o: dict[str, Any]) -> list[Any]:
-        cells = [o[f"{w}_{k}"] for w in ERRORS for k in ("mean_mm", "p95_mm", "max_mm")]
+        cells = [o[f"{w}_{k}"] for w in across for k in ("mean_mm", "p95_mm", "max_mm")]
         return [name, o["n_points"], *cells]
 
     rows = [row(name, o) for name, o in figures["objects"].items()]
     rows.append(row("all", figures))
     counts: list[list[Any]] = [
-        [name, o["contacts_missing"], o["truncated_sweeps"], o["stylus_contacts"]]
+        [
+            name,
+            o["lateral_mean_mm"],
+            o["lateral_p95_mm"],
+            o["lateral_max_mm"],
+            o["contacts_missing"],
+            o["truncated_sweeps"],
+            o["stylus_contacts"],
+        ]
         for name, o in figures["objects"].items()
     ]
     warm = list(script_seconds[1:])
@@ -337,9 +346,7 @@ def sensing_report(
             ),
         )
     ]
-    header = ["object", "points"] + [
-        f"{w} {k}" for w in ("sensor", "geometry", "total") for k in ("mean", "p95", "max")
-    ]
+    header = ["object", "points"] + [f"{w} {k}" for w in across for k in ("mean", "p95", "max")]
     return "\n".join(
         [
             *run.header("Simulated sensing: accuracy and speed", workers=False),
@@ -350,16 +357,29 @@ def sensing_report(
             "",
             "## Errors of the sensed points (mm)",
             "",
-            "sensor: sensed point to where MuJoCo's contact met the surface the tip "
-            "touched (the collider); geometry: that contact point to the object's mesh (how "
-            "far the collider lies from the object where the probe touches); total: sensed "
-            "point to the mesh.",
+            "Across the surfaces. sensor: sensed point to the surface the tip touched (the "
+            "collider's tangent plane at MuJoCo's contact point); geometry: MuJoCo's contact "
+            "point to the object's mesh (how far the collider lies from the object where "
+            "the probe touches); total: sensed point to the mesh.",
             "",
             markdown_table(header, rows, digits=4),
             "",
+            "Along the surface: the sensed point's offset from MuJoCo's contact point "
+            "(the tip's slide under friction between the contact and the reading), and the "
+            "session's events.",
+            "",
             markdown_table(
-                ["object", "readings without contact", "truncated sweeps", "shaft contacts"],
+                [
+                    "object",
+                    "lateral mean",
+                    "lateral p95",
+                    "lateral max",
+                    "readings without contact",
+                    "truncated sweeps",
+                    "shaft contacts",
+                ],
                 counts,
+                digits=4,
             ),
             "",
             "## Wall time (s)",
