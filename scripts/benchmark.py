@@ -3,7 +3,7 @@
 python scripts/benchmark.py                               # all three methods
 python scripts/benchmark.py --method fast --json out.json
 python scripts/benchmark.py --sweep delta                 # Fig. 4.11 (also length, angle)
-python scripts/benchmark.py --mesh-dir my_meshes --units mm
+python scripts/benchmark.py --mesh-dir my_meshes --units mm --with-catalog
 python scripts/benchmark.py --backend ray --ray-address auto --workers 8
 python scripts/benchmark.py --source sim --json out.json   # simulated robot: Tables 4.5-4.7
 python scripts/benchmark.py --source sim --experiment catalog --sessions 1 --method fast
@@ -20,6 +20,7 @@ import sys
 from pathlib import Path
 
 from recognition.evaluation import BACKENDS
+from recognition.surfaces.mesh_files import UNITS
 from tactile_sim.cli import run_cli
 from tactile_sim.evaluation import (
     EXPERIMENTS,
@@ -58,7 +59,12 @@ def parse_args(argv: list[str] | None = None) -> BenchmarkConfig:
     p.add_argument("--backend", choices=BACKENDS, default="local")
     p.add_argument("--ray-address", default=None, help="existing Ray cluster (e.g. auto)")
     p.add_argument("--mesh-dir", type=Path)
-    p.add_argument("--units", choices=("m", "mm"), default="m")
+    p.add_argument("--units", choices=tuple(UNITS), default="m", help="of the --mesh-dir meshes")
+    p.add_argument(
+        "--with-catalog",
+        action="store_true",
+        help="with --mesh-dir: recognise against the catalog's models as well",
+    )
     p.add_argument("--sweep", choices=tuple(SWEEPS))
     p.add_argument("--results", type=Path, help="JSONL of per-instance records")
     p.add_argument("--json", type=Path, dest="json_path", help="summary per method")
@@ -124,6 +130,8 @@ def parse_args(argv: list[str] | None = None) -> BenchmarkConfig:
         p.error("--spacing-mm and --delta must be positive, --noise-mm not negative")
     if a.mesh_dir is not None and not a.mesh_dir.is_dir():
         p.error(f"--mesh-dir {a.mesh_dir} is not a directory")
+    if a.with_catalog and a.mesh_dir is None:
+        p.error("--with-catalog applies to --mesh-dir")
     return BenchmarkConfig(
         source=a.source,
         synthetic=SyntheticSettings(
@@ -140,7 +148,7 @@ def parse_args(argv: list[str] | None = None) -> BenchmarkConfig:
             thesis_instances=a.thesis_instances,
             model_mismatch_mm=a.model_error_mm,
         ),
-        meshes=MeshSettings(mesh_dir=a.mesh_dir, units=a.units),
+        meshes=MeshSettings(mesh_dir=a.mesh_dir, units=a.units, with_catalog=a.with_catalog),
         run=RunSettings(
             workers=a.workers, backend=a.backend, ray_address=a.ray_address, results=a.results
         ),

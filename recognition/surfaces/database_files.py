@@ -28,11 +28,12 @@ from recognition.files import write_atomic
 from recognition.surfaces.distance import DistanceField
 from recognition.surfaces.lookup import CurvatureTable
 from recognition.surfaces.mesh_model import MeshModel, MeshModelConfig
+from recognition.surfaces.mesh_repair import MeshReport
 
 __all__ = ["DATABASE_FORMAT", "MANIFEST", "read_models", "write_models"]
 
 #: Version of the on-disk format; a different version is rebuilt, never read.
-DATABASE_FORMAT = 6
+DATABASE_FORMAT = 7
 #: The manifest's file name.
 MANIFEST = "manifest.json"
 
@@ -112,6 +113,7 @@ def write_models(models: list[MeshModel], directory: Path) -> Path:
                 "sha256": _digest(data),
                 "mesh_hash": model.hash,
                 "config": config,
+                "report": model.report.to_json(),
                 "timings_s": model.timings,
             }
         )
@@ -257,6 +259,12 @@ def read_models(directory: Path, config: MeshModelConfig | None = None) -> list[
             a["vertex_k2"].astype(float),
             a["vertex_d1"].astype(float),
         )
+        try:
+            report = MeshReport.from_json(entry["report"])
+        except (KeyError, TypeError, ValueError) as exc:
+            raise InvalidModel(
+                f"{directory / MANIFEST}: model {entry['name']!r} has no valid mesh report"
+            ) from exc
         model = MeshModel(
             entry["name"],
             mesh,
@@ -266,6 +274,7 @@ def read_models(directory: Path, config: MeshModelConfig | None = None) -> list[
             validate=False,
             candidate_curvatures=dense,
             normals=a["normals"],
+            report=report,
         )
         if model.hash != entry.get("mesh_hash"):
             raise InvalidModel(

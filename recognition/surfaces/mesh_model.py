@@ -21,9 +21,9 @@ import trimesh
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import cKDTree
 
-from recognition.errors import InvalidModel
 from recognition.surfaces.distance import DistanceField, MeshDistance
 from recognition.surfaces.lookup import CurvatureTable
+from recognition.surfaces.mesh_repair import MeshReport, prepare_mesh
 
 __all__ = [
     "MeshModel",
@@ -31,18 +31,12 @@ __all__ = [
     "adaptive_sample",
     "mesh_hash",
     "paraboloid_curvatures",
-    "validate_mesh",
     "vertex_normals",
 ]
 
 Array = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 
-#: Largest plausible bounding-box diagonal of a model in metres (a mm mesh read as m
-#: is 1000 times too large).
-MAX_DIAGONAL_M = 2.0
-#: Smallest plausible bounding-box diagonal in metres.
-MIN_DIAGONAL_M = 5.0e-3
 #: Neighbours of the single paraboloid fit at each candidate vertex of the fast mode
 #: (about 2.5 mm around it on the catalog's meshes: the scale of the data's curve fits).
 CANDIDATE_FIT_SIZE = 100
@@ -87,67 +81,6 @@ def mesh_hash(vertices: ArrayLike, faces: ArrayLike) -> str:
     h.update(np.ascontiguousarray(vertices, dtype=np.float64).tobytes())
     h.update(np.ascontiguousarray(faces, dtype=np.int64).tobytes())
     return h.hexdigest()
-
-
-def validate_mesh(mesh: trimesh.Trimesh, name: str = "mesh") -> trimesh.Trimesh:
-    """A clean copy of ``mesh`` or an :class:`~recognition.errors.InvalidModel` error.
-
-    Unreferenced vertices are dropped; an open mesh has its duplicated vertices merged
-    and small holes filled; zero-area triangles are removed where the surface stays
-    closed. A mesh that is still open, has several components, or whose size is
-    implausible for metres (e.g. millimetres read as metres) is refused with a message
-    that names the problem.
-    """
-    if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
-        raise InvalidModel(f"{name}: expected a non-empty triangle mesh")
-    m = trimesh.Trimesh(np.asarray(mesh.vertices, float), np.asarray(mesh.faces), process=False)
-    if not np.all(np.isfinite(m.vertices)):
-        raise InvalidModel(f"{name}: vertices contain NaN or infinity")
-    m.remove_unreferenced_vertices()
-    if not m.is_watertight:  # duplicated vertices along seams: merge them, then fill holes
-        m.merge_vertices()
-        m.update_faces(m.unique_faces())
-        trimesh.repair.fill_holes(m)
-    degenerate = ~m.nondegenerate_faces(height=1e-12)
-    if degenerate.any():
-        # zero-area triangles have no normal; dropping them is safe only if the surface
-        # stays closed (otherwise they are kept: they do not change distances or (4.13))
-        trial = m.copy()
-        trial.update_faces(~degenerate)
-        trial.remove_unreferenced_vertices()
-        if trial.is_watertight or not m.is_watertight:
-            m = trial
-    diagonal = float(np.linalg.norm(m.extents))
-    if diagonal > MAX_DIAGONAL_M:
-        raise InvalidModel(
-            f"{name}: bounding box diagonal is {diagonal:.3g} m; expected an object of "
-            f"{MIN_DIAGONAL_M * 1e3:.0f} mm to {MAX_DIAGONAL_M:.0f} m. It looks like a "
-            "mesh in millimetres read as metres: scale it by 1e-3 "
-            "(scripts/benchmark.py: --units mm)"
-        )
-    if diagonal < MIN_DIAGONAL_M:
-        raise InvalidModel(
-            f"{name}: bounding box diagonal is {diagonal * 1e3:.3g} mm; expected at least "
-            f"{MIN_DIAGONAL_M * 1e3:.0f} mm. Is the mesh in kilometres or already scaled twice?"
-        )
-    components = m.split(only_watertight=False)
-    if len(components) > 1:
-        sizes = sorted((len(c.faces) for c in components), reverse=True)
-        raise InvalidModel(
-            f"{name}: has {len(components)} separate components (faces: "
-            f"{', '.join(map(str, sizes[:5]))}{', ...' if len(sizes) > 5 else ''}); "
-            "expected one closed surface"
-        )
-    if not m.is_watertight:
-        raise InvalidModel(
-            f"{name}: the surface has holes that could not be filled; expected a closed "
-            "(watertight) surface"
-        )
-    if not m.is_winding_consistent:
-        trimesh.repair.fix_winding(m)
-    if m.volume < 0:
-        m.invert()
-    return m
 
 
 def vertex_normals(vertices: Array, faces: IntArray) -> Array:
@@ -403,17 +336,25 @@ class MeshModel:
     ----------
     name : str
     mesh : trimesh.Trimesh
-        Closed surface in metres; validated (and repaired where safe) on construction.
+        The surface in metres (open or in pieces as it may be); made a model on
+        construction (:func:`~recognition.surfaces.mesh_repair.prepare_mesh`).
     config : MeshModelConfig
     table : CurvatureTable, optional
         A table built earlier for the same mesh and config (e.g. loaded from a cache).
     distance_field : DistanceField, optional
     validate : bool
-        Validate (and repair) the mesh; False for a mesh loaded from a database.
+        Prepare (check and repair) the mesh; False for a mesh loaded from a database.
     candidate_curvatures : CurvatureTable, optional
         The fast mode's candidate map built earlier (see :attr:`candidate_curvatures`).
     normals : (n, 3) float, optional
         Vertex normals (4.13) computed earlier.
+    report : MeshReport, optional
+        What preparing the mesh did (with ``validate=False``: as recorded then).
+
+    Attributes
+    ----------
+    report : MeshReport
+        What was repaired, split or simplified to make the mesh a model.
     """
 
     def __init__(
@@ -426,10 +367,15 @@ class MeshModel:
         validate: bool = True,
         candidate_curvatures: CurvatureTable | None = None,
         normals: ArrayLike | None = None,
+        report: MeshReport | None = None,
     ) -> None:
         self.name = name
         self.config = config
-        self.mesh = validate_mesh(mesh, name) if validate else mesh
+        if validate:
+            self.mesh, self.report = prepare_mesh(mesh, name)
+        else:
+            self.mesh = mesh
+            self.report = report or MeshReport(len(mesh.vertices), len(mesh.faces))
         self.vertices = np.ascontiguousarray(self.mesh.vertices, dtype=np.float64)
         self.faces = np.ascontiguousarray(self.mesh.faces, dtype=np.int64)
         self.normals = (

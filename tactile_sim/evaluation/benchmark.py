@@ -106,11 +106,20 @@ def _directory(database: ModelDatabase) -> Path:
 
 
 def _results_path(
-    config: BenchmarkConfig, name: str, source: Any, registration: RegistrationConfig, tag: str
+    config: BenchmarkConfig,
+    name: str,
+    source: Any,
+    registration: RegistrationConfig,
+    tag: str,
+    handle: DatabaseHandle,
 ) -> Path:
+    """The records file of a run: keyed by the source, the registration and the models
+    (a database's folder is named by a hash of its content and settings), never by a
+    folder's name alone."""
     if config.run.results is not None:
         return config.run.results
-    key = settings_key(source, registration)
+    models = handle.name if isinstance(handle, Path) else repr(handle)
+    key = settings_key(source, registration, (models,))
     return Path(config.run.records_dir) / f"{name}{tag}_{key}.jsonl"
 
 
@@ -156,7 +165,7 @@ def run_synthetic(
     writes ``<name><tag>.md``; returns the summary per method."""
     syn, methods = config.synthetic, config.methods
     source = syn.source()
-    path = _results_path(config, name, source, methods.config(), "")
+    path = _results_path(config, name, source, methods.config(), "", _directory(database))
     jobs = plan_jobs(
         instance_specs(database, source), source, methods.configs(), methods.thesis_instances
     )
@@ -197,7 +206,9 @@ def run_sweep(
             delta_per_mm = value
         source = syn.source(n_points=n_points, plane_angle_deg=plane_angle_deg)
         registration = methods.config("fast", delta_per_mm)
-        path = _results_path(config, name, source, registration, f"_sweep_{config.sweep}")
+        path = _results_path(
+            config, name, source, registration, f"_sweep_{config.sweep}", _directory(database)
+        )
         jobs = plan_jobs(
             instance_specs(database, source),
             source,
@@ -299,7 +310,7 @@ def run_sim(config: BenchmarkConfig, *, echo: Echo = print) -> dict[str, Any]:
             registration = SolidExperiment().config()
             configs = {registration.mode.value: registration}
         name = f"sim_{experiment}"
-        path = _results_path(config, name, source, registration, tag)
+        path = _results_path(config, name, source, registration, tag, handle)
         jobs = plan_jobs(source.specs(None), source, configs, config.methods.thesis_instances)
         records = _records(config, handle, jobs, path)
         found = summarize(records)

@@ -178,10 +178,12 @@ class MeshSettings:
     Attributes
     ----------
     mesh_dir : Path or None
-        A directory of OBJ, PLY or STL files (one model each, named by the file); None:
-        the catalog.
-    units : {"m", "mm"}
+        A directory of mesh files (OBJ, PLY, STL, OFF, GLB, glTF: one model each, named by
+        the file); None: the catalog.
+    units : {"m", "mm", "cm", "in"}
         Units of the meshes.
+    with_catalog : bool
+        Recognise against the catalog's models as well as the folder's.
     cache_dir : Path
         Where the databases built from mesh directories are kept (one per content hash).
     """
@@ -189,6 +191,7 @@ class MeshSettings:
     mesh_dir: Path | None = None
     units: str = "m"
     cache_dir: Path = RUNS_DIR / "mesh_databases"
+    with_catalog: bool = False
 
 
 @dataclass(frozen=True)

@@ -12,9 +12,9 @@ from recognition.surfaces.mesh_model import (
     MeshModelConfig,
     adaptive_sample,
     paraboloid_curvatures,
-    validate_mesh,
     vertex_normals,
 )
+from recognition.surfaces.mesh_repair import prepare_mesh
 
 
 def closest_point_on_triangles(
@@ -187,30 +187,64 @@ def test_distance_field_agrees_with_exact_distance_in_its_band():
     np.testing.assert_allclose(value, approx, rtol=1e-6, atol=1e-9)
 
 
-def test_validation_refuses_bad_meshes_with_a_clear_message():
-    m = blob(subdivisions=3)
+def test_only_what_cannot_be_a_model_is_refused_with_a_clear_message():
+    m = blob(subdivisions=4)
     with pytest.raises(InvalidModel, match="millimetres"):
-        validate_mesh(trimesh.Trimesh(m.vertices * 1000, m.faces), "cat")
-    two = trimesh.util.concatenate([m, m.copy().apply_translation([0.2, 0, 0])])
-    with pytest.raises(InvalidModel, match="2 separate components"):
-        validate_mesh(two, "pair")
-    # a large hole (a whole cap of faces removed) cannot be filled
-    keep = m.triangles_center[:, 2] < 0.5 * m.vertices[:, 2].max()
-    open_mesh = trimesh.Trimesh(m.vertices, m.faces[keep])
-    with pytest.raises(InvalidModel, match="holes"):
-        validate_mesh(open_mesh, "open")
+        prepare_mesh(trimesh.Trimesh(m.vertices * 1000, m.faces), "cat")
     with pytest.raises(InvalidModel, match="non-empty"):
-        validate_mesh(trimesh.Trimesh(), "empty")
+        prepare_mesh(trimesh.Trimesh(), "empty")
+    nan = m.vertices.copy()
+    nan[5] = np.nan
+    with pytest.raises(InvalidModel, match="1 vertices hold NaN"):
+        prepare_mesh(trimesh.Trimesh(nan, m.faces, process=False), "nan")
+    flat = m.vertices * [1.0, 1.0, 0.0]
+    with pytest.raises(InvalidModel, match="flat"):
+        prepare_mesh(trimesh.Trimesh(flat, m.faces, process=False), "flat")
+    line = np.repeat(m.vertices[:1], len(m.vertices), axis=0)
+    line[:, 0] += np.linspace(0, 0.05, len(line))
+    with pytest.raises(InvalidModel, match="degenerate"):
+        prepare_mesh(trimesh.Trimesh(line, m.faces, process=False), "line")
 
 
-def test_validation_repairs_duplicated_seam_vertices():
-    m = sphere(0.03, subdivisions=3)
+def test_open_and_multi_component_meshes_are_kept_and_reported():
+    m = blob(subdivisions=4)
+    two = trimesh.util.concatenate([m, m.copy().apply_translation([0.2, 0, 0])])
+    kept, report = prepare_mesh(two, "pair")
+    assert report.components == 2 and report.closed and len(kept.faces) == len(two.faces)
+    # a cap cut away: the hole stays open, the normals point out of the object
+    keep = m.triangles_center[:, 2] < 0.5 * m.vertices[:, 2].max()
+    cut = trimesh.Trimesh(m.vertices, m.faces[keep])
+    cut.invert()  # wound inward, as some exporters do
+    model = MeshModel("cut", cut)
+    assert not model.report.closed and model.report.open_edges > 0
+    assert model.report.turned_outward == 1
+    centre = m.vertices.mean(axis=0)
+    outward = np.einsum("ij,ij->i", model.normals, model.vertices - centre)
+    assert np.mean(outward > 0) > 0.99
+    assert any("holes kept open" in n for n in model.report.notes)
+
+
+def test_seams_are_merged_and_reported():
+    m = sphere(0.03, subdivisions=4)
     # unshare every vertex: the surface is open until the seam vertices are merged
     tri = m.vertices[m.faces].reshape(-1, 3)
     split = trimesh.Trimesh(tri, np.arange(len(tri)).reshape(-1, 3), process=False)
     assert not split.is_watertight
-    fixed = validate_mesh(split, "split")
+    fixed, report = prepare_mesh(split, "split")
     assert fixed.is_watertight and len(fixed.vertices) == len(m.vertices)
+    assert report.merged_vertices == len(tri) - len(m.vertices) and report.closed
+
+
+def test_a_low_poly_mesh_is_refined_and_a_huge_one_simplified_with_its_loss():
+    coarse = trimesh.creation.icosphere(subdivisions=1, radius=0.03)  # 42 vertices
+    refined, report = prepare_mesh(coarse, "low poly")
+    assert report.split_edges and refined.edges_unique_length.max() <= 1.5e-3 + 1e-12
+    assert report.closed and report.components == 1
+    fine = trimesh.creation.icosphere(subdivisions=6, radius=0.03)  # 81920 faces
+    simplified, report = prepare_mesh(fine, "fine", max_faces=20_000)
+    mean, largest = report.simplification_error_m
+    assert len(simplified.faces) <= 20_000 and 0 < mean < 0.01e-3 and largest < 0.1e-3
+    assert any("simplified from 81920" in n for n in report.notes)
 
 
 def test_field_stack_reads_each_field_as_the_field_itself():
