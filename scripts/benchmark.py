@@ -121,8 +121,8 @@ def parse_args(argv: list[str] | None = None) -> BenchmarkConfig:
         p.error("--model-error-mm must lie in [0, 5)")
     if a.sessions < 1 or a.first_session < 0:
         p.error("--sessions must be at least 1 and --first-session at least 0")
-    if a.source == "sim" and (a.mesh_dir is not None or a.sweep is not None):
-        p.error("--mesh-dir and --sweep apply to --source synthetic only")
+    if a.source == "sim" and a.sweep is not None:
+        p.error("--sweep applies to --source synthetic only")
     for name in ("per_model", "n_points", "workers"):
         if getattr(a, name) < 1:
             p.error(f"--{name.replace('_', '-')} must be at least 1")

@@ -4,6 +4,7 @@ python scripts/probe.py --object cat
 python scripts/probe.py --object snail --seed 3 --out runs/snail
 python scripts/probe.py --object cat --rerun serve --web-port 9090
 python scripts/probe.py --object cat --model-error-mm 0.1 --json runs/cat.json
+python scripts/probe.py --mesh my_scan.ply --units mm
 """
 
 from __future__ import annotations
@@ -13,6 +14,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from recognition.surfaces.mesh_files import UNITS
 from tactile_sim.cli import run_cli
 from tactile_sim.evaluation import RERUN_MODES, ProbeRunConfig, probe_run
 
@@ -36,6 +38,8 @@ def run(config: ProbeRunConfig) -> dict[str, Any]:
 def show(s: dict[str, Any]) -> None:
     """Print a run's summary: the ranking, the errors against the truth, timings, files."""
     mark = "correct" if s["correct"] else "WRONG"
+    for note in s.get("mesh_repairs", []):
+        print(f"mesh: {note}")
     print(f"object {s['object']} (seed {s['seed']}): recognised as {s['recognized']} ({mark})")
     print("ranking (mean distance of the data to each model, mm):")
     for name, error in s["ranking_mm"][:5]:
@@ -70,6 +74,20 @@ def parse_args(argv: list[str] | None = None) -> ProbeRunConfig:
     """The run's settings from the command line (``argv``: default ``sys.argv``)."""
     p = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
     p.add_argument("--object", default="cat", help="catalog object to probe")
+    p.add_argument(
+        "--mesh",
+        type=Path,
+        default=None,
+        help="probe this mesh file instead (OBJ, PLY, STL, OFF, GLB, glTF; open or in pieces)",
+    )
+    p.add_argument("--units", choices=tuple(UNITS), default="m", help="of the --mesh file")
+    p.add_argument(
+        "--database",
+        type=Path,
+        default=None,
+        help="recognise against this saved database (default: the catalog's, with --mesh "
+        "the catalog's and the mesh's)",
+    )
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--n-points", type=int, default=21)
     p.add_argument("--spacing-mm", type=float, default=1.2)
@@ -103,8 +121,15 @@ def parse_args(argv: list[str] | None = None) -> ProbeRunConfig:
         p.error("--n-points must be at least 5 and --spacing-mm positive")
     if not a.model_error_mm >= 0 or not a.model_error_correlation_mm > 0:
         p.error("--model-error-mm must be >= 0 and --model-error-correlation-mm positive")
+    if a.mesh is not None and not a.mesh.is_file():
+        p.error(f"--mesh {a.mesh} is not a file")
+    if a.database is not None and not (a.database / "manifest.json").is_file():
+        p.error(f"--database {a.database} is not a saved model database (no manifest.json)")
     return ProbeRunConfig(
         object_name=a.object,
+        mesh=a.mesh,
+        units=a.units,
+        database=a.database,
         seed=a.seed,
         n_points=a.n_points,
         spacing_mm=a.spacing_mm,

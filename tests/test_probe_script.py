@@ -90,3 +90,45 @@ def test_a_bad_model_error_exits_2_before_any_work(
         probe.main(["--object", "cat", "--rerun", "off", *args])
     assert exit_.value.code == 2
     assert "--model-error" in capsys.readouterr().err
+
+
+def _open_creature(path: Path) -> Path:
+    """A blob with its base cut open and a separate eye, in millimetres (PLY)."""
+    import trimesh
+    from testing_meshes import blob
+
+    body = blob(5)
+    keep = body.triangles_center[:, 2] > -0.6 * body.vertices[:, 2].max()
+    cut = trimesh.Trimesh(body.vertices, body.faces[keep])
+    eye = trimesh.creation.icosphere(3, radius=0.004).apply_translation([0.028, 0.006, 0.005])
+    trimesh.util.concatenate([cut, eye]).apply_scale(1e3).export(path)
+    return path
+
+
+@pytest.mark.slow
+def test_your_own_open_mesh_in_pieces_is_probed_and_recognised(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    probe = load_script("probe")
+    mesh = _open_creature(tmp_path / "creature.ply")
+    args = ["--mesh", str(mesh), "--units", "mm", "--rerun", "off", "--out", str(tmp_path)]
+    summary = probe.run(probe.parse_args(args))
+    assert summary["object"] == "creature" and summary["correct"]
+    assert summary["location_error_mm"] < 1.0
+    assert any("holes kept open" in n for n in summary["mesh_repairs"])
+    assert any("2 separate components" in n for n in summary["mesh_repairs"])
+    names = [n for n, _ in summary["ranking_mm"]]
+    assert "creature" in names and "cat" in names  # the catalog's models and the mesh's
+    out = capsys.readouterr().out
+    assert "mesh: open:" in out and "recognised as creature (correct)" in out
+
+
+def test_a_mesh_that_cannot_be_a_model_exits_2_with_one_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    probe = load_script("probe")
+    flat = tmp_path / "sheet.obj"
+    flat.write_text("v 0 0 0\nv 10 0 0\nv 0 10 0\nv 10 10 0\nf 1 2 3\nf 2 4 3\n")
+    code = probe.main(["--mesh", str(flat), "--units", "mm", "--rerun", "off"])
+    err = capsys.readouterr().err
+    assert code == 2 and err.count("\n") == 1 and "flat" in err

@@ -47,7 +47,7 @@ from tactile_sim.evaluation.benchmark_config import (
     TIMED_OBJECT,
     BenchmarkConfig,
 )
-from tactile_sim.evaluation.databases import benchmark_database
+from tactile_sim.evaluation.databases import benchmark_database, mesh_files
 from tactile_sim.evaluation.reports import catalog_sessions_report, sensing_report, solids_report
 from tactile_sim.evaluation.sessions import (
     FIG_4_15_SOLIDS,
@@ -263,6 +263,12 @@ def _sim_source(config: BenchmarkConfig, experiment: str) -> SimulatedSource | N
     )
     if sim.spacing_mm is not None:
         source = replace(source, spacing_m=sim.spacing_mm * 1e-3)
+    meshes = config.meshes
+    if experiment == "catalog" and meshes.mesh_dir is not None:
+        files = tuple((p.stem, str(p)) for p in mesh_files(Path(meshes.mesh_dir)))
+        names = tuple(n for n, _ in files)
+        others = source.objects if meshes.with_catalog else ()
+        source = replace(source, objects=(*others, *names), meshes=files, units=meshes.units)
     if sim.objects is not None:
         kept = tuple(o for o in source.objects if o in sim.objects)
         if not kept:
@@ -282,7 +288,12 @@ def run_sim(config: BenchmarkConfig, *, echo: Echo = print) -> dict[str, Any]:
     """
     from tactile_sim.objects import object_names
 
-    known = (*object_names(), *FIG_4_15_SOLIDS)
+    mesh_names = (
+        tuple(p.stem for p in mesh_files(Path(config.meshes.mesh_dir)))
+        if config.meshes.mesh_dir is not None
+        else ()
+    )
+    known = (*object_names(), *FIG_4_15_SOLIDS, *mesh_names)
     for name in config.sim.objects or ():
         if name not in known:
             raise UnknownObject(name, known)
@@ -298,9 +309,7 @@ def run_sim(config: BenchmarkConfig, *, echo: Echo = print) -> dict[str, Any]:
             continue
         handle: DatabaseHandle
         if experiment == "catalog":
-            from tactile_sim.objects.database import catalog_database
-
-            database = catalog_database()
+            database, _ = benchmark_database(config.meshes)
             handle, names = _directory(database), database.names
             registration = config.methods.config()
             configs = config.methods.configs()

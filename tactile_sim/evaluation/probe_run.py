@@ -11,13 +11,20 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from recognition.errors import InvalidArgument
 from recognition.files import write_json_atomic
 from recognition.rigid import rotation_angle
+from recognition.surfaces.mesh_repair import MeshReport
+from tactile_sim.collision.parts import safe_name
 from tactile_sim.evaluation.benchmark_config import RUNS_DIR
+
+if TYPE_CHECKING:
+    from recognition import ModelDatabase
+    from tactile_sim.probing import ProbeTarget
 
 __all__ = ["RERUN_MODES", "ProbeRunConfig", "pose_error", "probe_run"]
 
@@ -33,7 +40,17 @@ class ProbeRunConfig:
     Attributes
     ----------
     object_name : str
-        A catalog object (``tactile_sim.objects.object_names()``).
+        A catalog object (``tactile_sim.objects.object_names()``); ignored with ``mesh``.
+    mesh : Path or None
+        Probe this mesh file instead (:func:`~tactile_sim.probing.mesh_target`: any of
+        OBJ, PLY, STL, OFF, GLB, glTF, open or in pieces), resting on the table in one of
+        its stable poses (drawn from ``seed``).
+    units : str
+        Units of ``mesh`` ("m", "mm", "cm" or "in").
+    database : Path or None
+        Recognise against this saved database (``ModelDatabase.save``); default: the
+        catalog's, with ``mesh`` the catalog's models and the mesh's (built once, cached
+        by the mesh's content).
     seed : int
         Seeds the object's pose, the probed point, the planes and the sensor noise.
     n_points, spacing_mm, plane_angle_deg
@@ -60,6 +77,9 @@ class ProbeRunConfig:
     """
 
     object_name: str = "cat"
+    mesh: Path | None = None
+    units: str = "m"
+    database: Path | None = None
     seed: int = 0
     n_points: int = 21
     spacing_mm: float = 1.2
@@ -116,11 +136,10 @@ def probe_run(config: ProbeRunConfig) -> dict[str, Any]:
     from recognition import FastConfig
     from tactile_sim.errors import UnknownObject
     from tactile_sim.objects import object_names
-    from tactile_sim.objects.database import catalog_database
     from tactile_sim.objects.mismatch import DisplacementField
-    from tactile_sim.probing import displaced_target, probe_object, resolve_object
+    from tactile_sim.probing import displaced_target, probe_object
 
-    if config.object_name not in object_names():
+    if config.mesh is None and config.object_name not in object_names():
         raise UnknownObject(config.object_name, object_names())
     displacement = DisplacementField(
         config.model_error_mm * 1e-3, config.model_error_correlation_mm * 1e-3, config.seed
@@ -134,9 +153,11 @@ def probe_run(config: ProbeRunConfig) -> dict[str, Any]:
 
         check_display()
     start = time.perf_counter()
-    database = catalog_database()
+    target, report = _target(config)
+    target = displaced_target(target, displacement)
+    name = target.name
+    database = _database(config, target, report)
     loaded = time.perf_counter()
-    target = displaced_target(resolve_object(config.object_name), displacement)
     session = probe_object(
         target,
         seed=config.seed,
@@ -155,10 +176,10 @@ def probe_run(config: ProbeRunConfig) -> dict[str, Any]:
     truth = session.ground_truth
     T_object_from_world = np.linalg.inv(truth.T_world_from_object)
     summary: dict[str, Any] = {
-        "object": config.object_name,
+        "object": name,
         "seed": config.seed,
         "recognized": result.name,
-        "correct": result.name == config.object_name,
+        "correct": result.name == name,
         "ranking_mm": [(n, e * 1e3 if np.isfinite(e) else None) for n, e in result.ranking],
         "margin_mm": result.margin_m * 1e3,
         "truncated_sweeps": list(session.messages),
@@ -177,8 +198,10 @@ def probe_run(config: ProbeRunConfig) -> dict[str, Any]:
             "achieved_rms": truth.model_error_rms_m * 1e3,
             "correlation": config.model_error_correlation_mm,
         }
-    own = result.registrations[config.object_name]
-    if np.all(np.isfinite(own.location)):
+    if report is not None:
+        summary["mesh_repairs"] = list(report.notes)
+    own = result.registrations.get(name)
+    if own is not None and np.all(np.isfinite(own.location)):
         summary["location_error_mm"] = float(
             np.linalg.norm(own.location - truth.data_point_in_object) * 1e3
         )
@@ -188,7 +211,7 @@ def probe_run(config: ProbeRunConfig) -> dict[str, Any]:
 
     out = config.out_dir
     out.mkdir(parents=True, exist_ok=True)
-    stem = f"{time.strftime('%Y%m%d-%H%M%S')}_{config.object_name}_seed{config.seed}"
+    stem = f"{time.strftime('%Y%m%d-%H%M%S')}_{safe_name(name)}_seed{config.seed}"
     session.curves.save(out / f"{stem}_curves.npz")
     summary["curves_file"] = str(out / f"{stem}_curves.npz")
     if config.rerun != "off":
@@ -200,3 +223,45 @@ def probe_run(config: ProbeRunConfig) -> dict[str, Any]:
     if config.json_path is not None:
         write_json_atomic(Path(config.json_path), summary)
     return summary
+
+
+def _target(config: ProbeRunConfig) -> tuple[ProbeTarget, MeshReport | None]:
+    """The object to probe and, for a mesh file, what was repaired to make it a model."""
+    from tactile_sim.objects import object_names
+    from tactile_sim.probing import mesh_target, resolve_object
+
+    if config.mesh is None:
+        return resolve_object(config.object_name), None
+    target, report = mesh_target(config.mesh, config.units)
+    if config.database is None and target.name in object_names():
+        raise InvalidArgument(
+            f"a catalog object is called {target.name!r}: rename {config.mesh} to probe it "
+            "against the catalog"
+        )
+    return target, report
+
+
+def _database(
+    config: ProbeRunConfig, target: ProbeTarget, report: MeshReport | None
+) -> ModelDatabase:
+    """The database to recognise against: the given one, the catalog's, or the catalog's
+    with the probed mesh's model (built once, cached by its content)."""
+    from recognition import ModelDatabase
+    from recognition.surfaces.mesh_model import MeshModel
+    from tactile_sim.objects.cache import generated_dir
+    from tactile_sim.objects.database import cached_database, catalog_database
+
+    if config.database is not None:
+        return ModelDatabase.load(config.database)
+    catalog = catalog_database()
+    if report is None:
+        return catalog
+    model = MeshModel(target.name, target.mesh, validate=False, report=report)
+    assert catalog.directory is not None
+    key = f"{catalog.directory.name}-{model.hash[:16]}"
+
+    def build() -> ModelDatabase:
+        return ModelDatabase({**catalog.models, target.name: model}).prepare()
+
+    directory = generated_dir("database") / f"with-{safe_name(target.name)}-{key}"
+    return cached_database(directory, build, f"the catalog's database with {target.name!r}")

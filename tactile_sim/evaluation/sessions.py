@@ -26,7 +26,13 @@ from tactile_sim.errors import SimulationError, UnknownObject
 from tactile_sim.evaluation.mesh_distances import mesh_distance
 from tactile_sim.objects import object_names
 from tactile_sim.objects.mismatch import DisplacementField
-from tactile_sim.probing import ProbingConfig, displaced_target, probe_object, resolve_object
+from tactile_sim.probing import (
+    ProbingConfig,
+    displaced_target,
+    mesh_target,
+    probe_object,
+    resolve_object,
+)
 from tactile_sim.probing.session import data_point_in_object
 from tactile_sim.sensor import SensorConfig
 
@@ -90,6 +96,11 @@ class SimulatedSource:
         object is its model.
     model_error_correlation_m : float, metres
         Correlation length of that displacement.
+    meshes : tuple of (name, path) pairs
+        Mesh files that may be probed as objects of these names
+        (:func:`~tactile_sim.probing.mesh_target`; resting in a seeded stable pose).
+    units : str
+        Units of the mesh files.
     """
 
     objects: tuple[str, ...] = field(default_factory=object_names)
@@ -104,10 +115,12 @@ class SimulatedSource:
     seed: int = 0
     model_error_m: float = 0.0
     model_error_correlation_m: float = 5e-3
+    meshes: tuple[tuple[str, str], ...] = ()
+    units: str = "m"
 
     def __post_init__(self) -> None:
         DisplacementField(self.model_error_m, self.model_error_correlation_m)  # valid?
-        known = (*object_names(), *solid_names())
+        known = (*object_names(), *solid_names(), *(name for name, _ in self.meshes))
         for name in self.objects:
             if name not in known:
                 raise UnknownObject(name, known)
@@ -147,7 +160,11 @@ class SimulatedSource:
         on the object, by the object's true pose.
         """
         try:
-            target = resolve_object(spec.model, progress=False)
+            files = dict(self.meshes)
+            if spec.model in files:
+                target, _ = mesh_target(files[spec.model], self.units, name=spec.model)
+            else:
+                target = resolve_object(spec.model, progress=False)
             displacement = DisplacementField(
                 self.model_error_m, self.model_error_correlation_m, spec.seed
             )
@@ -181,7 +198,7 @@ class SimulatedSource:
         )
         surface = (
             mesh_distance(spec.model)
-            if target.model_error_rms_m == 0
+            if target.model_error_rms_m == 0 and spec.model not in dict(self.meshes)
             else MeshDistance(target.mesh.vertices, target.mesh.faces)
         )
         T_object_from_world = np.linalg.inv(truth.T_world_from_object)

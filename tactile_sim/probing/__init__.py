@@ -18,8 +18,11 @@ from tactile_sim.probing.placement import (
     PlacementConfig,
     ProbeTarget,
     displaced_target,
+    mesh_target,
     random_pose,
     resolve_object,
+    resting_pose,
+    table_pose,
 )
 from tactile_sim.probing.plan import SamplingPlane, choose_point, sampling_planes
 from tactile_sim.probing.probe_scene import ProbeScene, build_probe_scene
@@ -42,9 +45,12 @@ __all__ = [
     "build_probe_scene",
     "choose_point",
     "displaced_target",
+    "mesh_target",
     "probe_object",
     "random_pose",
     "resolve_object",
+    "resting_pose",
     "sampling_planes",
+    "table_pose",
     "trace_contour",
 ]

@@ -8,13 +8,16 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+from pathlib import Path
 
 import numpy as np
 import trimesh
 from numpy.typing import NDArray
 
 from recognition.rigid import pose_matrix, rotation_about
+from recognition.surfaces.mesh_files import read_mesh
+from recognition.surfaces.mesh_repair import MeshReport, prepare_mesh
 from tactile_sim.collision import (
     ConvexParts,
     Solid,
@@ -23,6 +26,7 @@ from tactile_sim.collision import (
     object_parts,
     solid_names,
 )
+from tactile_sim.collision.tiling import surface_tiles
 from tactile_sim.errors import UnknownObject
 from tactile_sim.objects import ObjectModel, load_object, object_names
 from tactile_sim.objects.mismatch import DisplacementField, displaced_mesh
@@ -34,8 +38,11 @@ __all__ = [
     "PlacementConfig",
     "ProbeTarget",
     "displaced_target",
+    "mesh_target",
     "random_pose",
     "resolve_object",
+    "resting_pose",
+    "table_pose",
 ]
 
 
@@ -60,6 +67,10 @@ class ProbeTarget:
     model_error_rms_m : float
         How far ``mesh`` lies from the object's model (RMS, metres): 0 unless displaced
         (:func:`displaced_target`).
+    upright : bool
+        The model frame stands the object on its base at z = 0 (the catalog's objects and
+        solids); False (a mesh file): it rests in one of its stable poses
+        (:func:`table_pose`).
     """
 
     name: str
@@ -67,6 +78,7 @@ class ProbeTarget:
     parts: ConvexParts
     drawn: trimesh.Trimesh | None = None
     model_error_rms_m: float = 0.0
+    upright: bool = True
 
     @property
     def drawn_mesh(self) -> trimesh.Trimesh:
@@ -79,6 +91,37 @@ ObjectLike = str | ObjectModel | Solid | trimesh.Trimesh | ProbeTarget
 metres (model frame, base on z = 0), or a resolved :class:`ProbeTarget`."""
 
 
+def mesh_target(
+    path: str | Path, units: str = "m", *, name: str | None = None
+) -> tuple[ProbeTarget, MeshReport]:
+    """Returns a mesh file as an object to probe, and what was repaired to make it a model.
+
+    The file is read (:func:`~recognition.surfaces.mesh_files.read_mesh`: OBJ, PLY, STL,
+    OFF, GLB, glTF in ``units``) and made a model (holes kept, pieces kept,
+    :func:`~recognition.surfaces.mesh_repair.prepare_mesh`); the tip meets that surface
+    itself, and convex tiles of it (:func:`~tactile_sim.collision.tiling.surface_tiles`,
+    a fraction of a second) keep the probe's body off it. The object is named after the
+    file unless ``name`` is given.
+
+    Raises
+    ------
+    RecognitionError
+        The file cannot be read or the mesh cannot be a model (the message says why).
+    """
+    path = Path(path)
+    label = name or path.stem
+    mesh, report = prepare_mesh(read_mesh(path, units), label)
+    return ProbeTarget(label, mesh, surface_tiles(mesh), upright=False), report
+
+
+def resting_pose(mesh: trimesh.Trimesh, rng: np.random.Generator) -> NDArray[np.float64]:
+    """Returns a pose (4, 4) in which ``mesh`` rests stably on the plane z = 0, drawn from
+    its stable poses by their probability (trimesh's quasi-static estimate on the convex
+    hull, whatever the mesh's holes and pieces)."""
+    poses, probabilities = trimesh.poses.compute_stable_poses(mesh, n_samples=1)
+    return np.asarray(poses[rng.choice(len(poses), p=probabilities / probabilities.sum())])
+
+
 def displaced_target(target: ProbeTarget, field: DisplacementField) -> ProbeTarget:
     """Returns ``target`` with its surface displaced along the normals by ``field`` (an
     object that differs from its model, :mod:`tactile_sim.objects.mismatch`); the collision
@@ -88,7 +131,7 @@ def displaced_target(target: ProbeTarget, field: DisplacementField) -> ProbeTarg
         return target
     mesh, achieved = displaced_mesh(target.mesh, field)
     drawn, _ = displaced_mesh(visual_mesh(target.mesh), field, scale_from=target.mesh)
-    return ProbeTarget(target.name, mesh, target.parts, drawn, achieved)
+    return replace(target, mesh=mesh, drawn=drawn, model_error_rms_m=achieved)
 
 
 def resolve_object(obj: ObjectLike, *, progress: bool = True) -> ProbeTarget:
@@ -140,6 +183,16 @@ class PlacementConfig:
 
     max_offset_m: float = 0.02
     yaw_range_rad: tuple[float, float] = (-math.pi, math.pi)
+
+
+def table_pose(target: ProbeTarget, seed: int) -> NDArray[np.float64]:
+    """Returns the object's seeded pose on the table: :func:`random_pose` (generator
+    ``[seed, 1]``), after :func:`resting_pose` (generator ``[seed, 3]``) unless the model
+    stands upright as modelled."""
+    T = random_pose(np.random.default_rng([seed, 1]))
+    if target.upright:
+        return T
+    return T @ resting_pose(target.mesh, np.random.default_rng([seed, 3]))
 
 
 def random_pose(

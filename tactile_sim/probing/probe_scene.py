@@ -24,8 +24,8 @@ from tactile_sim.probing.placement import (
     MOUNT_IN_WORLD,
     ObjectLike,
     ProbeTarget,
-    random_pose,
     resolve_object,
+    table_pose,
 )
 
 __all__ = [
@@ -170,7 +170,7 @@ def build_probe_scene(
     obj : str, ObjectModel, Solid or trimesh.Trimesh
         See :func:`resolve_object`.
     T_world_from_object : (4, 4) float or None
-        Object pose; None draws one with :func:`random_pose` from ``seed``.
+        Object pose; None draws one with :func:`table_pose` from ``seed``.
     seed : int
         Seed of the random pose.
     progress : bool
@@ -182,7 +182,7 @@ def build_probe_scene(
     start = time.perf_counter()
     target = resolve_object(obj, progress=progress)
     if T_world_from_object is None:
-        T = random_pose(np.random.default_rng([seed, 1]))
+        T = table_pose(target, seed)
     else:
         T = np.asarray(T_world_from_object, dtype=np.float64)
         if T.shape != (4, 4) or not np.allclose(T[:3, :3] @ T[:3, :3].T, np.eye(3), atol=1e-6):
