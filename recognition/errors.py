@@ -5,6 +5,7 @@ __all__ = [
     "InvalidArgument",
     "InvalidCurveData",
     "InvalidModel",
+    "InvalidRecords",
     "NoRealSolution",
     "RecognitionError",
 ]
@@ -33,3 +34,8 @@ class InvalidModel(RecognitionError, ValueError):
 class InvalidArgument(RecognitionError, ValueError):
     """An argument of a library call lies outside its domain (a NaN or negative threshold,
     an unknown model name, an empty selection)."""
+
+
+class InvalidRecords(RecognitionError, ValueError):
+    """A benchmark records file (JSONL) holds a line that is not a record: the message
+    names the file, the line number and what a line must be."""
