@@ -1,6 +1,7 @@
 """Exceptions raised by the recognition library."""
 
 __all__ = [
+    "BackendUnavailable",
     "DegenerateGeometry",
     "InvalidArgument",
     "InvalidCurveData",
@@ -39,3 +40,8 @@ class InvalidArgument(RecognitionError, ValueError):
 class InvalidRecords(RecognitionError, ValueError):
     """A benchmark records file (JSONL) holds a line that is not a record: the message
     names the file, the line number and what a line must be."""
+
+
+class BackendUnavailable(RecognitionError, ConnectionError):
+    """A benchmark backend cannot be reached (e.g. no Ray cluster answers at the address
+    given): the message names the address and what was expected there."""
