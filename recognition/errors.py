@@ -1,10 +1,12 @@
 """Exceptions raised by the recognition library."""
 
 __all__ = [
+    "BackendUnavailable",
     "DegenerateGeometry",
     "InvalidArgument",
     "InvalidCurveData",
     "InvalidModel",
+    "InvalidRecords",
     "NoRealSolution",
     "RecognitionError",
 ]
@@ -33,3 +35,13 @@ class InvalidModel(RecognitionError, ValueError):
 class InvalidArgument(RecognitionError, ValueError):
     """An argument of a library call lies outside its domain (a NaN or negative threshold,
     an unknown model name, an empty selection)."""
+
+
+class InvalidRecords(RecognitionError, ValueError):
+    """A benchmark records file (JSONL) holds a line that is not a record: the message
+    names the file, the line number and what a line must be."""
+
+
+class BackendUnavailable(RecognitionError, ConnectionError):
+    """A benchmark backend cannot be reached (e.g. no Ray cluster answers at the address
+    given): the message names the address and what was expected there."""

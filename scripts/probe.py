@@ -9,14 +9,20 @@ python scripts/probe.py --mesh my_scan.ply --units mm
 
 from __future__ import annotations
 
-import argparse
 import sys
 from pathlib import Path
 from typing import Any
 
 from recognition.surfaces.mesh_files import UNITS
-from tactile_sim.cli import run_cli
+from tactile_sim.cli import ArgumentParser, integer, real, require_writable, run_cli, viewer_ports
 from tactile_sim.evaluation import RERUN_MODES, ProbeRunConfig, probe_run
+from tactile_sim.probing import (
+    MAX_CURVE_LENGTH_M,
+    MAX_SPACING_M,
+    MIN_CURVE_POINTS,
+    PLANE_ANGLE_RANGE_DEG,
+)
+from tactile_sim.recording.viewer import GRPC_PORT, WEB_PORT
 
 
 def run(config: ProbeRunConfig) -> dict[str, Any]:
@@ -71,8 +77,11 @@ def show(s: dict[str, Any]) -> None:
 
 
 def parse_args(argv: list[str] | None = None) -> ProbeRunConfig:
-    """The run's settings from the command line (``argv``: default ``sys.argv``)."""
-    p = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
+    """The run's settings from the command line (``argv``: default ``sys.argv``); a bad
+    one, an output path that cannot be written or a viewer port in use exits 2 here,
+    before any work."""
+    low_angle, high_angle = PLANE_ANGLE_RANGE_DEG
+    p = ArgumentParser(description=(__doc__ or "").splitlines()[0])
     p.add_argument("--object", default="cat", help="catalog object to probe")
     p.add_argument(
         "--mesh",
@@ -88,10 +97,20 @@ def parse_args(argv: list[str] | None = None) -> ProbeRunConfig:
         help="recognise against this saved database (default: the catalog's, with --mesh "
         "the catalog's and the mesh's)",
     )
-    p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--n-points", type=int, default=21)
-    p.add_argument("--spacing-mm", type=float, default=1.2)
-    p.add_argument("--plane-angle", type=float, default=60.0)
+    p.add_argument("--seed", type=integer(0), default=0)
+    p.add_argument("--n-points", type=integer(MIN_CURVE_POINTS), default=21, help="per curve")
+    p.add_argument(
+        "--spacing-mm",
+        type=real(0.0, MAX_SPACING_M * 1e3, low_open=True, high_open=True),
+        default=1.2,
+        help="between points along a curve",
+    )
+    p.add_argument(
+        "--plane-angle",
+        type=real(low_angle, high_angle),
+        default=60.0,
+        help="between sampling planes, degrees",
+    )
     p.add_argument("--out", type=Path, default=None, help="output directory (default runs/)")
     p.add_argument(
         "--rerun",
@@ -100,32 +119,37 @@ def parse_args(argv: list[str] | None = None) -> ProbeRunConfig:
         help="save an .rrd (default), spawn the native viewer, serve a web viewer on "
         "127.0.0.1, or record nothing",
     )
-    p.add_argument("--web-port", type=int, default=9090, help="web viewer HTTP port (serve)")
-    p.add_argument("--grpc-port", type=int, default=9876, help="recording gRPC port (serve)")
+    p.add_argument("--web-port", type=int, help=f"web viewer HTTP port (serve; {WEB_PORT})")
+    p.add_argument("--grpc-port", type=int, help=f"recording gRPC port (serve; {GRPC_PORT})")
     p.add_argument(
         "--model-error-mm",
-        type=float,
+        type=real(0.0),
         default=0.0,
         help="probe the object displaced from its model along the normals by a smooth "
         "random field of this RMS, mm (default 0)",
     )
     p.add_argument(
         "--model-error-correlation-mm",
-        type=float,
+        type=real(0.0, low_open=True),
         default=5.0,
         help="correlation length of that field, mm",
     )
     p.add_argument("--json", type=Path, default=None, help="also write the summary here")
     a = p.parse_args(argv)
-    if a.n_points < 5 or a.spacing_mm <= 0:
-        p.error("--n-points must be at least 5 and --spacing-mm positive")
-    if not a.model_error_mm >= 0 or not a.model_error_correlation_mm > 0:
-        p.error("--model-error-mm must be >= 0 and --model-error-correlation-mm positive")
+    if (a.n_points - 1) * a.spacing_mm > MAX_CURVE_LENGTH_M * 1e3:
+        p.error(
+            f"--n-points {a.n_points} at --spacing-mm {a.spacing_mm:g} make curves of "
+            f"{(a.n_points - 1) * a.spacing_mm:g} mm; expected at most "
+            f"{MAX_CURVE_LENGTH_M * 1e3:g} mm"
+        )
     if a.mesh is not None and not a.mesh.is_file():
         p.error(f"--mesh {a.mesh} is not a file")
     if a.database is not None and not (a.database / "manifest.json").is_file():
         p.error(f"--database {a.database} is not a saved model database (no manifest.json)")
-    return ProbeRunConfig(
+    web_port, grpc_port = viewer_ports(
+        p, a.web_port, a.grpc_port, serving=a.rerun == "serve", needs="--rerun serve"
+    )
+    config = ProbeRunConfig(
         object_name=a.object,
         mesh=a.mesh,
         units=a.units,
@@ -136,12 +160,15 @@ def parse_args(argv: list[str] | None = None) -> ProbeRunConfig:
         plane_angle_deg=a.plane_angle,
         out=a.out,
         rerun=a.rerun,
-        web_port=a.web_port,
-        grpc_port=a.grpc_port,
+        web_port=web_port,
+        grpc_port=grpc_port,
         model_error_mm=a.model_error_mm,
         model_error_correlation_mm=a.model_error_correlation_mm,
         json_path=a.json,
     )
+    require_writable(p, "--out", config.out_dir, directory=True)
+    require_writable(p, "--json", a.json)
+    return config
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -12,11 +12,10 @@ built first if they are not cached.
 
 from __future__ import annotations
 
-import argparse
 import sys
 from pathlib import Path
 
-from tactile_sim.cli import run_cli
+from tactile_sim.cli import ArgumentParser, integer, require_writable, run_cli
 from tactile_sim.objects.render import RenderConfig, render_objects
 
 
@@ -29,13 +28,17 @@ def run(config: RenderConfig) -> list[Path]:
 
 
 def parse_args(argv: list[str] | None = None) -> RenderConfig:
-    """What to render from the command line (``argv``: default ``sys.argv``)."""
-    parser = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
+    """What to render from the command line (``argv``: default ``sys.argv``); a bad option
+    or an output directory that cannot be written exits 2 here."""
+    parser = ArgumentParser(description=(__doc__ or "").splitlines()[0])
     parser.add_argument("--objects", nargs="*", default=[], help="object names (default: all)")
     parser.add_argument("--out", type=Path, default=RenderConfig.out_dir, help="output directory")
-    parser.add_argument("--faces", type=int, default=RenderConfig.faces, help="faces drawn")
+    parser.add_argument(
+        "--faces", type=integer(100), default=RenderConfig.faces, help="faces drawn (>= 100)"
+    )
     parser.add_argument("--no-contact-sheet", action="store_true", help="skip the contact sheet")
     args = parser.parse_args(argv)
+    require_writable(parser, "--out", args.out, directory=True)
     return RenderConfig(
         objects=tuple(args.objects),
         out_dir=args.out,
@@ -45,7 +48,8 @@ def parse_args(argv: list[str] | None = None) -> RenderConfig:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Parse the arguments and render; 2 on an unknown object or a failed build."""
+    """Parse the arguments and render; 2 on an unknown object or a failed build, 130 on
+    Ctrl-C."""
     config = parse_args(argv)
     return run_cli(lambda: run(config), name="render_objects")
 

@@ -6,12 +6,12 @@ python scripts/replay.py runs/20260101-120000_cat_seed0.rrd --web --port 9090
 
 from __future__ import annotations
 
-import argparse
 import sys
 from dataclasses import dataclass
 from pathlib import Path
 
-from tactile_sim.cli import run_cli
+from tactile_sim.cli import ArgumentParser, run_cli, viewer_ports
+from tactile_sim.recording.viewer import GRPC_PORT, WEB_PORT
 
 
 @dataclass(frozen=True)
@@ -30,8 +30,8 @@ class Config:
 
     file: Path
     web: bool = False
-    web_port: int = 9090
-    grpc_port: int = 9876
+    web_port: int = WEB_PORT
+    grpc_port: int = GRPC_PORT
 
 
 def run(config: Config) -> None:
@@ -52,16 +52,18 @@ def run(config: Config) -> None:
 
 
 def parse_args(argv: list[str] | None = None) -> Config:
-    """The recording and viewer from the command line (``argv``: default ``sys.argv``)."""
-    p = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
+    """The recording and viewer from the command line (``argv``: default ``sys.argv``);
+    bad or busy ports exit 2 here."""
+    p = ArgumentParser(description=(__doc__ or "").splitlines()[0])
     p.add_argument("file", type=Path, help="the .rrd recording")
     p.add_argument("--web", action="store_true", help="serve to a browser on 127.0.0.1")
     p.add_argument(
-        "--port", "--web-port", dest="web_port", type=int, default=9090, help="web viewer port"
+        "--port", "--web-port", dest="web_port", type=int, help=f"web viewer port ({WEB_PORT})"
     )
-    p.add_argument("--grpc-port", type=int, default=9876, help="recording gRPC port (--web)")
+    p.add_argument("--grpc-port", type=int, help=f"recording gRPC port (--web; {GRPC_PORT})")
     a = p.parse_args(argv)
-    return Config(a.file, a.web, a.web_port, a.grpc_port)
+    ports = viewer_ports(p, a.web_port, a.grpc_port, serving=a.web, needs="--web")
+    return Config(a.file, a.web, *ports)
 
 
 def main(argv: list[str] | None = None) -> int:

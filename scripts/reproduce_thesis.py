@@ -8,19 +8,20 @@ python scripts/reproduce_thesis.py --table 3.4 --source sim --json docs/results/
 
 from __future__ import annotations
 
-import argparse
 import sys
 from functools import partial
 from pathlib import Path
 
 from recognition.reproduction.reproduce import TABLES, ReproductionConfig
-from tactile_sim.cli import run_cli
+from tactile_sim.cli import ArgumentParser, integer, require_writable, run_cli
 from tactile_sim.evaluation import SIM_TABLES, ThesisTablesConfig, reproduce_thesis
 
 
 def parse_args(argv: list[str] | None = None) -> ThesisTablesConfig:
-    """The tables and outputs from the command line (``argv``: default ``sys.argv``)."""
-    parser = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
+    """The tables and outputs from the command line (``argv``: default ``sys.argv``); a bad
+    option or an output path that cannot be written exits 2 here, before any table."""
+    defaults = ThesisTablesConfig()
+    parser = ArgumentParser(description=(__doc__ or "").splitlines()[0])
     parser.add_argument(
         "--table",
         action="append",
@@ -31,9 +32,16 @@ def parse_args(argv: list[str] | None = None) -> ThesisTablesConfig:
     parser.add_argument(
         "--figures", type=Path, help="write Figs. 3.1-3.3, 3.7, 4.3, 4.5 and 4.7 as PNGs here"
     )
-    parser.add_argument("--curves", type=int, default=100, help="random curves per class")
-    parser.add_argument("--workers", type=int, default=None, help="worker processes")
-    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument(
+        "--curves",
+        type=integer(1),
+        default=defaults.reproduction.curves,
+        help="random curves per class",
+    )
+    parser.add_argument(
+        "--workers", type=integer(1), default=None, help="worker processes (default: the cores)"
+    )
+    parser.add_argument("--seed", type=integer(0), default=0)
     parser.add_argument(
         "--source",
         choices=("synthetic", "sim"),
@@ -41,7 +49,11 @@ def parse_args(argv: list[str] | None = None) -> ThesisTablesConfig:
         help=f"tactile points sampled on the closed form or sensed by the simulated robot "
         f"(tables {', '.join(SIM_TABLES)})",
     )
-    parser.add_argument("--sim-trials", type=int, default=10, help="with --source sim: experiments")
+    parser.add_argument(
+        "--sim-trials",
+        type=integer(1),
+        help=f"with --source sim: experiments ({defaults.sim_trials})",
+    )
     args = parser.parse_args(argv)
     tables = TABLES if not args.table or "all" in args.table else tuple(args.table)
     if args.source == "sim":
@@ -51,11 +63,13 @@ def parse_args(argv: list[str] | None = None) -> ThesisTablesConfig:
             parser.error(
                 f"--source sim applies to table {', '.join(SIM_TABLES)} only, not {others}"
             )
-    if args.curves < 1 or args.sim_trials < 1:
-        parser.error("--curves and --sim-trials must be at least 1")
+    elif args.sim_trials is not None:
+        parser.error("--sim-trials applies to --source sim only")
+    require_writable(parser, "--json", args.json)
+    require_writable(parser, "--figures", args.figures, directory=True)
     return ThesisTablesConfig(
         ReproductionConfig(
-            tables=tables,
+            tables=tuple(dict.fromkeys(tables)),
             json_path=args.json,
             figures_dir=args.figures,
             curves=args.curves,
@@ -63,12 +77,12 @@ def parse_args(argv: list[str] | None = None) -> ThesisTablesConfig:
             seed=args.seed,
         ),
         source=args.source,
-        sim_trials=args.sim_trials,
+        sim_trials=defaults.sim_trials if args.sim_trials is None else args.sim_trials,
     )
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Parse the arguments and reproduce the tables; 2 on bad input."""
+    """Parse the arguments and reproduce the tables; 2 on bad input, 130 on Ctrl-C."""
     config = parse_args(argv)
     return run_cli(lambda: reproduce_thesis(config, echo=partial(print, flush=True)))
 

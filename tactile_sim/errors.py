@@ -9,6 +9,7 @@ __all__ = [
     "AssetError",
     "InvalidMesh",
     "InvalidRecording",
+    "InvalidSettings",
     "PortInUse",
     "RecordingError",
     "SimulationError",
@@ -40,6 +41,11 @@ class UnknownObject(SimulationError, KeyError):
 
 class InvalidMesh(SimulationError, ValueError):
     """A generated or loaded mesh is not a closed, single-component, consistently wound surface."""
+
+
+class InvalidSettings(SimulationError, ValueError):
+    """Probing or experiment settings out of range (points per curve, their spacing, the
+    plane angle, sessions): the message names the setting, its value and its range."""
 
 
 class AssetError(SimulationError, OSError):

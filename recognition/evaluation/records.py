@@ -18,6 +18,8 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
+from recognition.errors import InvalidRecords
+
 __all__ = [
     "TIMING_FIELDS",
     "Record",
@@ -79,6 +81,18 @@ class ReferenceRecord:
 
 
 _BEFORE_INFO = ("instance", "model", "index", "vertex", "seed")
+#: Keys every record's JSON object has.
+_REQUIRED = (
+    *_BEFORE_INFO,
+    "instance_time_s",
+    "method",
+    "recognized",
+    "success",
+    "time_s",
+    "errors_mm",
+    "times_s",
+    "localization_error_mm",
+)
 
 
 @dataclass(frozen=True)
@@ -223,17 +237,63 @@ class Record:
 
 
 def read_results(path: Path | str) -> list[Record]:
-    """Records of a JSONL results file (a truncated last line is ignored)."""
+    """Records of a JSONL results file (none if it does not exist; a last line cut short
+    by a killed run, without its newline, is ignored).
+
+    Raises
+    ------
+    InvalidRecords
+        A line is not a record (not JSON, not a JSON object, keys missing, values of the
+        wrong type) or the file is not text; the message names the file and the line.
+    """
+    path = Path(path)
+    if not path.exists():
+        return []
+    try:
+        text = path.read_bytes().decode()
+    except UnicodeDecodeError as exc:
+        raise InvalidRecords(
+            f"{path} is not a records file: not UTF-8 text (byte {exc.start}); expected "
+            "one JSON benchmark record per line"
+        ) from exc
+    lines = text.split("\n")
     records: list[Record] = []
-    if not Path(path).exists():
-        return records
-    for line in Path(path).read_text().splitlines():
-        try:
-            payload = json.loads(line)
-        except json.JSONDecodeError:
+    for number, line in enumerate(lines, start=1):
+        if not line.strip():
             continue
-        records.append(Record.from_json(payload))
+        try:
+            records.append(_parse_record(line))
+        except InvalidRecords as exc:
+            if number == len(lines):  # no newline after it: cut short by a killed run
+                break
+            raise InvalidRecords(
+                f"{path}, line {number}: {exc}; expected one JSON benchmark record per line "
+                "(as scripts/benchmark.py writes them)"
+            ) from exc
     return records
+
+
+def _parse_record(line: str) -> Record:
+    """The record of one JSONL line.
+
+    Raises
+    ------
+    InvalidRecords
+        The line is not a record; the message says why.
+    """
+    try:
+        payload = json.loads(line)
+    except json.JSONDecodeError as exc:
+        raise InvalidRecords(f"not JSON ({exc.msg})") from exc
+    if not isinstance(payload, dict):
+        raise InvalidRecords(f"a JSON {type(payload).__name__}, not an object")
+    missing = [k for k in _REQUIRED if k not in payload]
+    if missing:
+        raise InvalidRecords(f"keys missing: {', '.join(missing)}")
+    try:
+        return Record.from_json(payload)
+    except (TypeError, ValueError, AttributeError, KeyError) as exc:
+        raise InvalidRecords(f"a value of the wrong type ({exc})") from exc
 
 
 def comparable(record: Record) -> dict[str, Any]:

@@ -16,6 +16,7 @@ from recognition.evaluation.models import DatabaseHandle, load_database
 from recognition.evaluation.ray_backend import run_on_ray
 from recognition.evaluation.records import Record, read_results
 from recognition.evaluation.workers import worker_init, worker_run
+from recognition.pools import process_pool
 
 __all__ = ["BACKENDS", "run"]
 
@@ -125,6 +126,10 @@ def run(
                 record(job, run_job(db, job))
         else:
             _run_pool(database, todo, record, workers)
+    except KeyboardInterrupt:
+        if bar:
+            bar.leave = False  # the caller reports the interrupt on the bar's line
+        raise
     finally:
         if bar:
             bar.close()
@@ -137,17 +142,11 @@ def _run_pool(
     record: Callable[[Job, list[Record]], None],
     workers: int,
 ) -> None:
-    """``todo`` in a local pool of ``workers`` processes, each holding the database."""
-    from concurrent.futures import ProcessPoolExecutor, as_completed
+    """``todo`` in a local pool of ``workers`` processes, each holding the database; an
+    interrupt or an error ends the workers at once."""
+    from concurrent.futures import as_completed
 
-    with ProcessPoolExecutor(
-        min(workers, len(todo)), initializer=worker_init, initargs=(database,)
-    ) as pool:
+    with process_pool(min(workers, len(todo)), worker_init, (database,)) as pool:
         futures = {pool.submit(worker_run, job): job for job in todo}
-        try:
-            for future in as_completed(futures):
-                record(futures[future], future.result())
-        except BaseException:
-            for future in futures:
-                future.cancel()
-            raise
+        for future in as_completed(futures):
+            record(futures[future], future.result())

@@ -2,13 +2,13 @@
 
 from __future__ import annotations
 
-import json
 import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
+from recognition.files import write_json_atomic
 from recognition.reproduction import chapter3, chapter4_closed_form
 from recognition.reproduction.tables import TableResult
 
@@ -117,9 +117,6 @@ def reproduce(
             echo(f"wrote {path}")
     if config.json_path is not None:
         payload = [r.to_json() for r in results]
-        config.json_path.parent.mkdir(parents=True, exist_ok=True)
-        tmp = config.json_path.with_suffix(config.json_path.suffix + ".tmp")
-        tmp.write_text(json.dumps(payload[0] if len(payload) == 1 else payload, indent=2))
-        tmp.replace(config.json_path)
+        write_json_atomic(config.json_path, payload[0] if len(payload) == 1 else payload)
         echo(f"wrote {config.json_path}")
     return results

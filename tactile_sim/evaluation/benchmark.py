@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import Any
 
 from recognition import ModelDatabase, RegistrationConfig
+from recognition.errors import InvalidCurveData
 from recognition.evaluation import (
     ClosedFormModels,
     DatabaseHandle,
@@ -24,7 +25,9 @@ from recognition.evaluation import (
     Job,
     MethodSummary,
     Record,
+    SyntheticSource,
     instance_specs,
+    read_results,
     settings_key,
     summarize,
     summary_json,
@@ -56,7 +59,15 @@ from tactile_sim.evaluation.sessions import (
     solids_experiment,
 )
 
-__all__ = ["plan_jobs", "run", "run_sensing", "run_sim", "run_sweep", "run_synthetic"]
+__all__ = [
+    "check_config",
+    "plan_jobs",
+    "run",
+    "run_sensing",
+    "run_sim",
+    "run_sweep",
+    "run_synthetic",
+]
 
 Echo = Callable[[str], object]
 
@@ -141,6 +152,31 @@ def _write_report(config: BenchmarkConfig, file_name: str, text: str, echo: Echo
     echo(text)
 
 
+def check_config(config: BenchmarkConfig) -> None:
+    """Checks a run's settings before any work: makes every instance source the run uses
+    (they check their settings) and reads the records file given (``config.run.results``).
+
+    Raises
+    ------
+    RecognitionError
+        Synthetic settings that make no instance (e.g. sampling planes that coincide), or
+        a records file with a line that is not a record (``InvalidRecords``).
+    SimulationError
+        Simulated sessions' settings out of range (``InvalidSettings``, e.g. sweeps longer
+        than the largest object).
+    """
+    if config.source == "sim":
+        for experiment in config.sim.experiments:
+            if experiment != "sensing":
+                _sim_source(config, experiment)
+    elif config.sweep:
+        _sweep_points(config)
+    else:
+        config.synthetic.source()
+    if config.run.results is not None:
+        read_results(config.run.results)
+
+
 def run(config: BenchmarkConfig, *, echo: Echo = print) -> dict[str, Any]:
     """Run the benchmark of ``config``; write records, reports and the summary JSON.
 
@@ -149,6 +185,7 @@ def run(config: BenchmarkConfig, *, echo: Echo = print) -> dict[str, Any]:
     dict
         The JSON summary: per method (and ``sensing``), or a sweep's points.
     """
+    check_config(config)
     if config.source == "sim":
         return run_sim(config, echo=echo)
     database, name = benchmark_database(config.meshes)
@@ -196,16 +233,7 @@ def run_sweep(
     sweep = SWEEPS[config.sweep]
     syn, methods = config.synthetic, config.methods
     results: dict[float, MethodSummary] = {}
-    for value in sweep.values:
-        n_points = plane_angle_deg = delta_per_mm = None
-        if sweep.parameter == "length_mm":
-            n_points = round(value / syn.spacing_mm) + 1
-        elif sweep.parameter == "plane_angle_deg":
-            plane_angle_deg = value
-        else:
-            delta_per_mm = value
-        source = syn.source(n_points=n_points, plane_angle_deg=plane_angle_deg)
-        registration = methods.config("fast", delta_per_mm)
+    for value, source, registration in _sweep_points(config):
         path = _results_path(
             config, name, source, registration, f"_sweep_{config.sweep}", _directory(database)
         )
@@ -247,6 +275,32 @@ def run_sweep(
     )
     _write_report(config, f"{stem}.md", text, echo)
     return payload
+
+
+def _sweep_points(
+    config: BenchmarkConfig,
+) -> list[tuple[float, SyntheticSource, RegistrationConfig]]:
+    """Each value of the configured sweep, with the instance source and the registration
+    it is run with."""
+    if config.sweep is None:
+        raise ValueError("a sweep's points need config.sweep")
+    sweep = SWEEPS[config.sweep]
+    syn, methods = config.synthetic, config.methods
+    points = []
+    for value in sweep.values:
+        n_points = plane_angle_deg = delta_per_mm = None
+        if sweep.parameter == "length_mm":
+            n_points = round(value / syn.spacing_mm) + 1
+        elif sweep.parameter == "plane_angle_deg":
+            plane_angle_deg = value
+        else:
+            delta_per_mm = value
+        try:
+            source = syn.source(n_points=n_points, plane_angle_deg=plane_angle_deg)
+        except InvalidCurveData as exc:
+            raise InvalidCurveData(f"the {config.sweep} sweep at {value:g}: {exc}") from exc
+        points.append((value, source, methods.config("fast", delta_per_mm)))
+    return points
 
 
 def _sim_source(config: BenchmarkConfig, experiment: str) -> SimulatedSource | None:

@@ -21,6 +21,7 @@ from recognition.rigid import rotation_angle
 from recognition.surfaces.mesh_repair import MeshReport
 from tactile_sim.collision.parts import safe_name
 from tactile_sim.evaluation.benchmark_config import RUNS_DIR
+from tactile_sim.recording.viewer import GRPC_PORT, WEB_PORT
 
 if TYPE_CHECKING:
     from recognition import ModelDatabase
@@ -86,8 +87,8 @@ class ProbeRunConfig:
     plane_angle_deg: float = 60.0
     out: Path | None = None
     rerun: str = "save"
-    web_port: int = 9090
-    grpc_port: int = 9876
+    web_port: int = WEB_PORT
+    grpc_port: int = GRPC_PORT
     trajectory_hz: float = 200.0
     model_error_mm: float = 0.0
     model_error_correlation_mm: float = 5.0

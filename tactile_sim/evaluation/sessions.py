@@ -22,12 +22,13 @@ from recognition.evaluation import Instance, InstanceSpec
 from recognition.rigid import apply_pose
 from recognition.surfaces.distance import MeshDistance
 from tactile_sim.collision import solid_names
-from tactile_sim.errors import SimulationError, UnknownObject
+from tactile_sim.errors import InvalidSettings, SimulationError, UnknownObject
 from tactile_sim.evaluation.mesh_distances import mesh_distance
 from tactile_sim.objects import object_names
 from tactile_sim.objects.mismatch import DisplacementField
 from tactile_sim.probing import (
     ProbingConfig,
+    check_sweep,
     displaced_target,
     mesh_target,
     probe_object,
@@ -125,9 +126,10 @@ class SimulatedSource:
             if name not in known:
                 raise UnknownObject(name, known)
         if self.curves not in _CURVES:
-            raise ValueError(f"curves must be one of {_CURVES}, got {self.curves!r}")
+            raise InvalidSettings(f"curves must be one of {_CURVES}, got {self.curves!r}")
+        check_sweep(self.n_points, self.spacing_m, self.plane_angle_deg)
         if self.sessions_per_object < 1 or self.first_session < 0:
-            raise ValueError(
+            raise InvalidSettings(
                 f"sessions_per_object must be >= 1 and first_session >= 0, got "
                 f"{self.sessions_per_object} and {self.first_session}"
             )

@@ -12,6 +12,7 @@ from typing import Any
 
 import numpy as np
 
+from tactile_sim.errors import UnknownObject
 from tactile_sim.objects.catalog import ObjectModel, load_object, object_names
 
 __all__ = ["COLOURS", "DOCS_OBJECTS_DIR", "VIEWS", "RenderConfig", "draw_object", "render_objects"]
@@ -134,13 +135,22 @@ def _title(model: ObjectModel) -> str:
 
 
 def render_objects(config: RenderConfig) -> list[Path]:
-    """Render the configured objects; return the written PNG paths."""
+    """Render the configured objects; return the written PNG paths.
+
+    Raises
+    ------
+    UnknownObject
+        A name is not a catalog object (checked before any object is built).
+    """
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     names = config.objects or object_names()
+    for name in names:  # all of them before building any
+        if name not in object_names():
+            raise UnknownObject(name, object_names())
     models = [load_object(name) for name in names]
     config.out_dir.mkdir(parents=True, exist_ok=True)
     written = []

@@ -26,10 +26,23 @@ from tactile_sim.probing.placement import (
 )
 from tactile_sim.probing.plan import SamplingPlane, choose_point, sampling_planes
 from tactile_sim.probing.probe_scene import ProbeScene, build_probe_scene
-from tactile_sim.probing.session import GroundTruth, ProbeSession, probe_object
+from tactile_sim.probing.session import (
+    MAX_CURVE_LENGTH_M,
+    MAX_SPACING_M,
+    MIN_CURVE_POINTS,
+    PLANE_ANGLE_RANGE_DEG,
+    GroundTruth,
+    ProbeSession,
+    check_sweep,
+    probe_object,
+)
 from tactile_sim.probing.sweep import StopReason, SweepResult, SweepSide
 
 __all__ = [
+    "MAX_CURVE_LENGTH_M",
+    "MAX_SPACING_M",
+    "MIN_CURVE_POINTS",
+    "PLANE_ANGLE_RANGE_DEG",
     "ContourTrace",
     "GroundTruth",
     "PlacementConfig",
@@ -43,6 +56,7 @@ __all__ = [
     "SweepSide",
     "SweepTruncated",
     "build_probe_scene",
+    "check_sweep",
     "choose_point",
     "displaced_target",
     "mesh_target",

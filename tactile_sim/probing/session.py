@@ -21,7 +21,7 @@ from numpy.typing import ArrayLike, NDArray
 from recognition import DataCurves, RecognitionError
 from recognition.rigid import apply_pose
 from recognition.surfaces.registration import common_point
-from tactile_sim.errors import SweepTruncated, UnusableCurves
+from tactile_sim.errors import InvalidSettings, SweepTruncated, UnusableCurves
 from tactile_sim.kinematics import inverse_kinematics
 from tactile_sim.probing.config import ProbingConfig
 from tactile_sim.probing.placement import ObjectLike
@@ -33,15 +33,29 @@ from tactile_sim.sensor import SensorConfig
 from tactile_sim.trajectory import Trajectory, TrajectoryRecorder
 
 __all__ = [
+    "MAX_CURVE_LENGTH_M",
+    "MAX_SPACING_M",
     "MIN_CURVE_POINTS",
+    "PLANE_ANGLE_RANGE_DEG",
     "GroundTruth",
     "ProbeSession",
+    "check_sweep",
     "probe_object",
 ]
 
 
 MIN_CURVE_POINTS = 5
 """Fewest points a data curve may have (``recognition.DataCurves`` asks for five)."""
+
+MAX_SPACING_M = 0.02
+"""Point spacing along a sweep must be below this, metres."""
+
+MAX_CURVE_LENGTH_M = 0.1
+"""Longest sweep, (n_points - 1) * spacing, metres: the largest catalog object is under
+0.1 m."""
+
+PLANE_ANGLE_RANGE_DEG = (5.0, 85.0)
+"""Smallest and largest angle between neighbouring sampling planes, degrees."""
 
 
 def data_point_in_object(
@@ -152,6 +166,32 @@ class ProbeSession:
         )
 
 
+def check_sweep(n_points: int, spacing_m: float, plane_angle_deg: float) -> None:
+    """Checks a session's sweep settings: at least :data:`MIN_CURVE_POINTS` points, a
+    spacing in (0, :data:`MAX_SPACING_M`), a sweep no longer than
+    :data:`MAX_CURVE_LENGTH_M` and a plane angle in :data:`PLANE_ANGLE_RANGE_DEG`.
+
+    Raises
+    ------
+    InvalidSettings
+        The setting out of range, and its range.
+    """
+    if n_points < MIN_CURVE_POINTS:
+        raise InvalidSettings(f"n_points must be >= 5 (a data curve needs five), got {n_points}")
+    if not 0 < spacing_m < MAX_SPACING_M:
+        raise InvalidSettings(f"spacing_m must lie in (0, {MAX_SPACING_M:g}) m, got {spacing_m}")
+    if not (n_points - 1) * spacing_m <= MAX_CURVE_LENGTH_M:
+        raise InvalidSettings(
+            f"a sweep of {n_points} points {spacing_m:g} m apart is longer than "
+            f"{MAX_CURVE_LENGTH_M:g} m"
+        )
+    low, high = PLANE_ANGLE_RANGE_DEG
+    if not low <= plane_angle_deg <= high:
+        raise InvalidSettings(
+            f"plane_angle_deg must lie in [{low:g}, {high:g}] deg, got {plane_angle_deg}"
+        )
+
+
 def probe_object(
     obj: ObjectLike,
     *,
@@ -227,12 +267,7 @@ def probe_object(
     wall_start = time.perf_counter()
     config = config or ProbingConfig()
     sensor = sensor or SensorConfig()
-    if n_points < 5:
-        raise ValueError(f"n_points must be >= 5 (a data curve needs five), got {n_points}")
-    if not 0 < spacing_m < 0.02:
-        raise ValueError(f"spacing_m must lie in (0, 0.02) m, got {spacing_m}")
-    if not 5.0 <= plane_angle_deg <= 85.0:
-        raise ValueError(f"plane_angle_deg must lie in [5, 85] deg, got {plane_angle_deg}")
+    check_sweep(n_points, spacing_m, plane_angle_deg)
     rng = np.random.default_rng(seed)
     build_seconds = 0.0
     if probe_scene is None:

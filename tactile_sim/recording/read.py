@@ -48,12 +48,14 @@ def read_recording(path: str | Path) -> RecordingSummary:
     Raises
     ------
     InvalidRecording
-        The file is missing, not an .rrd file, truncated (no footer, or a chunk cut
+        The file is missing (or a directory), not an .rrd file, truncated (no footer, or a chunk cut
         short) or holds no recording.
     """
     from rerun.chunk import RrdReader
 
     path = Path(path)
+    if path.is_dir():
+        raise InvalidRecording(f"{path} is a directory; expected an .rrd recording file")
     if not path.is_file():
         raise InvalidRecording(f"no recording at {path}: the file does not exist")
     try:

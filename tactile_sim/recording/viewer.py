@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import ctypes
 import os
 import shutil
 import signal
@@ -13,14 +14,17 @@ import tempfile
 import threading
 import time
 import urllib.parse
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from types import FrameType
+from typing import IO
 
 from tactile_sim.errors import PortInUse, RecordingError
 from tactile_sim.recording.read import read_recording
 
 __all__ = [
+    "GRPC_PORT",
+    "WEB_PORT",
     "WebViewer",
     "check_display",
     "check_ports",
@@ -28,6 +32,11 @@ __all__ = [
     "rerun_executable",
     "serve_recording",
 ]
+
+#: Default HTTP port of the web viewer page.
+WEB_PORT = 9090
+#: Default gRPC port of the recording's data.
+GRPC_PORT = 9876
 
 
 def rerun_executable() -> str:
@@ -63,16 +72,23 @@ def _free_port(host: str, avoid: Sequence[int] = ()) -> int:
             return port
 
 
-def check_ports(web_port: int = 9090, grpc_port: int = 9876, host: str = "127.0.0.1") -> None:
-    """Checks that the web viewer's ports are free on ``host``.
+def check_ports(
+    web_port: int = WEB_PORT, grpc_port: int = GRPC_PORT, host: str = "127.0.0.1"
+) -> None:
+    """Checks that the web viewer's ports are two different ports, free on ``host``.
 
     Raises
     ------
+    RecordingError
+        A port outside 1-65535, or both the same; the message names the option.
     PortInUse
         A port is taken; the message names the option to pass and a free port.
     """
+    for port, option in ((web_port, "--web-port"), (grpc_port, "--grpc-port")):
+        if not 1 <= port <= 65535:
+            raise RecordingError(f"{option} {port}: expected a port in 1-65535")
     if web_port == grpc_port:
-        raise ValueError(f"the web and gRPC ports must differ, both are {web_port}")
+        raise RecordingError(f"--web-port and --grpc-port must differ, both are {web_port}")
     if not _port_free(host, web_port):
         raise PortInUse(web_port, "--web-port", _free_port(host, (grpc_port,)))
     if not _port_free(host, grpc_port):
@@ -80,8 +96,39 @@ def check_ports(web_port: int = 9090, grpc_port: int = 9876, host: str = "127.0.
 
 
 def _interrupt(signum: int, frame: FrameType | None) -> None:
-    """Turns SIGTERM into a KeyboardInterrupt (the server then stops like on Ctrl-C)."""
+    """Turns SIGTERM or SIGHUP into a KeyboardInterrupt (the server then stops like on
+    Ctrl-C)."""
     raise KeyboardInterrupt
+
+
+#: Signals that stop :meth:`WebViewer.wait` like Ctrl-C: ``kill`` and a closed terminal.
+_STOP_SIGNALS = (signal.SIGTERM, signal.SIGHUP) if hasattr(signal, "SIGHUP") else (signal.SIGTERM,)
+
+#: ``prctl`` option: the signal a process gets when the thread that started it ends.
+_PR_SET_PDEATHSIG = 1
+
+
+def _stopped_with_parent() -> Callable[[], None] | None:
+    """A ``preexec_fn`` that has Linux send the child SIGTERM when its parent ends, however
+    it ends (SIGKILL included); None elsewhere."""
+    if not sys.platform.startswith("linux"):
+        return None
+    libc = ctypes.CDLL(None, use_errno=True)
+    parent = os.getpid()
+
+    def preexec() -> None:
+        libc.prctl(_PR_SET_PDEATHSIG, int(signal.SIGTERM), 0, 0, 0)
+        if os.getppid() != parent:  # the parent ended before prctl took effect
+            os._exit(1)
+
+    return preexec
+
+
+def _feed(path: Path, pipe: IO[bytes]) -> None:
+    """Writes the recording into the server's stdin, and leaves the pipe open."""
+    with contextlib.suppress(OSError, ValueError), path.open("rb") as f:
+        shutil.copyfileobj(f, pipe)
+        pipe.flush()
 
 
 class WebViewer:
@@ -101,18 +148,18 @@ class WebViewer:
         self.url = url
 
     def wait(self) -> int:
-        """Blocks until the server stops (Ctrl-C or SIGTERM stop it); returns its exit
-        status (0 when stopped here)."""
+        """Blocks until the server stops (Ctrl-C, SIGTERM or SIGHUP stop it); returns its
+        exit status (0 when stopped here)."""
         main = threading.current_thread() is threading.main_thread()
-        previous = signal.signal(signal.SIGTERM, _interrupt) if main else None
+        previous = {s: signal.signal(s, _interrupt) for s in _STOP_SIGNALS} if main else {}
         try:
             return self.process.wait()
         except KeyboardInterrupt:
             return 0
         finally:
             self.close()
-            if main:
-                signal.signal(signal.SIGTERM, previous)
+            for s, handler in previous.items():
+                signal.signal(s, handler)
 
     def close(self) -> None:
         """Stops the server."""
@@ -123,6 +170,9 @@ class WebViewer:
             except subprocess.TimeoutExpired:
                 self.process.kill()
                 self.process.wait()
+        if self.process.stdin is not None:
+            with contextlib.suppress(OSError):
+                self.process.stdin.close()
 
     def __enter__(self) -> WebViewer:
         return self
@@ -134,14 +184,19 @@ class WebViewer:
 def serve_recording(
     path: str | Path,
     *,
-    web_port: int = 9090,
-    grpc_port: int = 9876,
+    web_port: int = WEB_PORT,
+    grpc_port: int = GRPC_PORT,
     host: str = "127.0.0.1",
     timeout_s: float = 30.0,
 ) -> WebViewer:
     """Serves a recording to browsers: the web viewer over HTTP, the data over gRPC.
 
-    Both servers bind ``host`` only (loopback by default).
+    Both servers bind ``host`` only (loopback by default). The server (``rerun
+    --serve-web``) reads the recording from its stdin, a pipe this process keeps open:
+    rerun 0.41's server spins on a full core once a file or a closed pipe it reads from
+    has ended, and idles while the pipe stays open. On Linux the server ends with the
+    thread that started it, even when this process is killed (``prctl`` parent-death
+    signal); :meth:`WebViewer.close` or leaving the ``with`` block stops it otherwise.
 
     Parameters
     ----------
@@ -161,7 +216,7 @@ def serve_recording(
     PortInUse
         A port is taken; the message names a free one.
     RecordingError
-        The viewer did not start.
+        The ports are not two valid ports, or the viewer did not start.
     """
     path = Path(path)
     read_recording(path)
@@ -177,12 +232,14 @@ def serve_recording(
             str(web_port),
             "--port",
             str(grpc_port),
-            str(path),
+            "-",
         ],
         stdout=log,
         stderr=subprocess.STDOUT,
-        stdin=subprocess.DEVNULL,
+        stdin=subprocess.PIPE,
+        preexec_fn=_stopped_with_parent(),
     )
+    threading.Thread(target=_feed, args=(path, process.stdin), daemon=True).start()
     viewer = WebViewer(process, _viewer_url(host, web_port, grpc_port))
     deadline = time.monotonic() + timeout_s
     while not (_listening(host, web_port) and _listening(host, grpc_port)):

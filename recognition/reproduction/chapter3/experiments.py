@@ -5,7 +5,6 @@ from __future__ import annotations
 import itertools
 import os
 from collections.abc import Iterable, Sequence
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -17,6 +16,7 @@ from recognition.curves.estimation import LocalGeometry, local_fit_geometry
 from recognition.curves.families import CanonicalCurve, CurveKind
 from recognition.curves.recognition import canonical_parameters, recognize_curve
 from recognition.curves.sampling import SampledCurve, random_curve, sample_by_arc_length
+from recognition.pools import process_pool
 from recognition.reproduction.chapter3.measures import relative_parameter_error
 from recognition.reproduction.chapter3.reference import (
     CLASSES,
@@ -300,5 +300,5 @@ def classify_random_curves(
     workers = workers or os.cpu_count() or 1
     if workers == 1:
         return [_classify_one(job) for job in jobs]
-    with ProcessPoolExecutor(workers) as pool:
+    with process_pool(workers) as pool:
         return list(pool.map(_classify_one, jobs, chunksize=4))

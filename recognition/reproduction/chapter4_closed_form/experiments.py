@@ -21,13 +21,13 @@ from __future__ import annotations
 
 import functools
 import os
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from recognition.pools import process_pool
 from recognition.rigid import random_rigid_motion
 from recognition.surfaces import closed_form as cf
 from recognition.surfaces.data_curves import DataCurves
@@ -324,7 +324,7 @@ def surface_instances(
         if workers == 1:
             records = [_instance(job) for job in jobs]
         else:
-            with ProcessPoolExecutor(workers) as pool:
+            with process_pool(workers) as pool:
                 records = list(pool.map(_instance, jobs))
         _INSTANCES[experiment] = tuple(records)
     return _INSTANCES[experiment]

@@ -1,4 +1,5 @@
-"""The viewers: ports, and the web viewer rendering a recording in headless Chromium."""
+"""The viewers: ports, the web viewer idling and ending with its parent, and rendering a
+recording in headless Chromium."""
 
 from __future__ import annotations
 
@@ -7,18 +8,22 @@ import io
 import json
 import os
 import select
+import signal
 import socket
 import subprocess
+import sys
 import time
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from tactile_sim.errors import PortInUse, SimulationError
+from tactile_sim.errors import PortInUse, RecordingError, SimulationError
 from tactile_sim.recording import check_ports, serve_recording
 
 CHROMIUM = Path("/usr/bin/chromium")
+ROOT = Path(__file__).resolve().parents[3]
+LINUX = sys.platform.startswith("linux")
 
 
 def test_port_in_use_is_reported_with_a_free_alternative() -> None:
@@ -34,10 +39,89 @@ def test_port_in_use_is_reported_with_a_free_alternative() -> None:
     assert isinstance(info.value, SimulationError)
 
 
+@pytest.mark.parametrize(
+    ("web_port", "grpc_port", "message"),
+    [
+        (0, 9876, "--web-port 0: expected a port in 1-65535"),
+        (9090, 70000, "--grpc-port 70000: expected a port in 1-65535"),
+        (9090, 9090, "must differ, both are 9090"),
+    ],
+)
+def test_ports_out_of_range_or_equal_are_refused(
+    web_port: int, grpc_port: int, message: str
+) -> None:
+    with pytest.raises(RecordingError, match=message):
+        check_ports(web_port, grpc_port)
+
+
 def _free_port() -> int:
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
         return s.getsockname()[1]
+
+
+def _cpu_seconds(pid: int) -> float:
+    """User and system CPU time of a process so far (Linux /proc), seconds."""
+    fields = Path(f"/proc/{pid}/stat").read_text().rpartition(")")[2].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+def _running(pid: int) -> bool:
+    """The process exists and is not a zombie (Linux /proc)."""
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rpartition(")")[2].split()[0]
+    except FileNotFoundError:
+        return False
+    return state != "Z"
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not LINUX, reason="reads /proc")
+def test_the_web_viewer_idles_once_it_holds_the_recording(recording: Path) -> None:
+    with serve_recording(recording, web_port=_free_port(), grpc_port=_free_port()) as viewer:
+        time.sleep(1.5)  # reads the recording
+        before, start = _cpu_seconds(viewer.process.pid), time.monotonic()
+        time.sleep(3.0)
+        load = (_cpu_seconds(viewer.process.pid) - before) / (time.monotonic() - start)
+        assert viewer.process.poll() is None
+    assert load < 0.2, f"the idle server used {load:.0%} of a core"
+
+
+_PARENT = """
+import sys
+from tactile_sim.recording import serve_recording
+viewer = serve_recording(sys.argv[1], web_port=int(sys.argv[2]), grpc_port=int(sys.argv[3]))
+print(viewer.process.pid, flush=True)
+viewer.wait()
+"""
+
+
+@pytest.mark.skipif(not LINUX, reason="the parent-death signal is Linux's")
+@pytest.mark.parametrize("signum", [signal.SIGKILL, signal.SIGHUP], ids=["SIGKILL", "SIGHUP"])
+def test_the_web_viewer_ends_with_its_parent_and_frees_its_ports(
+    recording: Path, signum: int
+) -> None:
+    ports = _free_port(), _free_port()
+    parent = subprocess.Popen(
+        [sys.executable, "-c", _PARENT, str(recording), *map(str, ports)],
+        cwd=ROOT,
+        stdout=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        server = int(parent.stdout.readline())
+        assert _running(server)
+        os.kill(parent.pid, signum)
+        # killed at once, or (SIGHUP: a closed terminal) stopped the server and ended
+        assert parent.wait(timeout=10) == (0 if signum == signal.SIGHUP else -signum)
+        deadline = time.monotonic() + 5.0
+        while _running(server) and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert not _running(server)
+        check_ports(*ports)
+    finally:
+        parent.kill()
+        parent.wait()
 
 
 class _Chromium:

@@ -1,0 +1,52 @@
+"""Process pools that stop at once on Ctrl-C: the workers ignore SIGINT, the parent ends them."""
+
+from __future__ import annotations
+
+import contextlib
+import multiprocessing
+import signal
+from collections.abc import Callable, Iterator
+from concurrent.futures import ProcessPoolExecutor
+from typing import Any
+
+__all__ = ["process_pool"]
+
+
+def _ignore_interrupts(
+    initializer: Callable[..., object] | None, initargs: tuple[Any, ...]
+) -> None:
+    """A worker's start: Ctrl-C is the parent's to handle, then ``initializer(*initargs)``."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    if initializer is not None:
+        initializer(*initargs)
+
+
+@contextlib.contextmanager
+def process_pool(
+    workers: int,
+    initializer: Callable[..., object] | None = None,
+    initargs: tuple[Any, ...] = (),
+) -> Iterator[ProcessPoolExecutor]:
+    """A :class:`~concurrent.futures.ProcessPoolExecutor` of ``workers`` processes whose
+    workers ignore SIGINT (a Ctrl-C at a terminal reaches the whole process group: only
+    the parent reports it).
+
+    Leaving the block normally waits for the work submitted; leaving it by an exception
+    (Ctrl-C's ``KeyboardInterrupt`` included) cancels what has not started and terminates
+    the workers at once instead of waiting for their jobs.
+    """
+    before = set(multiprocessing.active_children())
+    pool = ProcessPoolExecutor(
+        workers, initializer=_ignore_interrupts, initargs=(initializer, initargs)
+    )
+    try:
+        yield pool
+    except BaseException:
+        pool.shutdown(wait=False, cancel_futures=True)
+        started = set(multiprocessing.active_children()) - before
+        for process in started:
+            process.terminate()
+        for process in started:
+            process.join(timeout=5)
+        raise
+    pool.shutdown(wait=True)
