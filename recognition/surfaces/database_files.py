@@ -33,7 +33,7 @@ from recognition.surfaces.mesh_repair import MeshReport
 __all__ = ["DATABASE_FORMAT", "MANIFEST", "read_models", "write_models"]
 
 #: Version of the on-disk format; a different version is rebuilt, never read.
-DATABASE_FORMAT = 7
+DATABASE_FORMAT = 8
 #: The manifest's file name.
 MANIFEST = "manifest.json"
 
@@ -54,6 +54,7 @@ _ARRAYS = (
     "field_voxel",
     "field_band",
     "field_values",
+    "symmetries",
 )
 
 
@@ -90,6 +91,7 @@ def _arrays(model: MeshModel) -> dict[str, np.ndarray]:
         "field_voxel": np.array(df.voxel),
         "field_band": np.array(df.band),
         "field_values": df.values,
+        "symmetries": model.symmetries,
     }
 
 
@@ -222,6 +224,12 @@ def _check_arrays(a: dict[str, np.ndarray], label: str) -> None:
         fail("the distance field must be a 3-D grid with a (3,) origin")
     if not (float(a["field_voxel"]) > 0 and float(a["field_band"]) > 0):
         fail("the distance field's voxel and band must be positive")
+    symmetries = a["symmetries"]
+    if symmetries.ndim != 3 or symmetries.shape[1:] != (4, 4) or symmetries.dtype.kind != "f":
+        fail(f"symmetries must be a float (k, 4, 4) array, got {symmetries.shape}")
+    rotations = symmetries[:, :3, :3]
+    if np.any(np.abs(rotations @ np.swapaxes(rotations, 1, 2) - np.eye(3)) > 1e-6):
+        fail("symmetries must be rigid motions")
     unit = np.linalg.norm(a["normals"], axis=1)
     if np.any(np.abs(unit - 1) > 1e-6):
         fail("normals must be unit vectors")
@@ -275,6 +283,7 @@ def read_models(directory: Path, config: MeshModelConfig | None = None) -> list[
             candidate_curvatures=dense,
             normals=a["normals"],
             report=report,
+            symmetries=a["symmetries"],
         )
         if model.hash != entry.get("mesh_hash"):
             raise InvalidModel(

@@ -12,6 +12,7 @@ object, convex regions have positive curvature, k1 >= k2.
 from __future__ import annotations
 
 import hashlib
+import time
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -24,6 +25,7 @@ from scipy.spatial import cKDTree
 from recognition.surfaces.distance import DistanceField, MeshDistance
 from recognition.surfaces.lookup import CurvatureTable
 from recognition.surfaces.mesh_repair import MeshReport, prepare_mesh
+from recognition.surfaces.symmetry import rotational_symmetries
 
 __all__ = [
     "MeshModel",
@@ -42,6 +44,10 @@ IntArray = NDArray[np.int64]
 CANDIDATE_FIT_SIZE = 100
 #: The fast mode's candidate vertices: one per cubic cell of this side, metres.
 CANDIDATE_SPACING_M = 1.0e-3
+#: A motion is a symmetry of a model when it maps the surface within this of itself
+#: (99 % of it), metres: a tessellation is symmetric to within its chords, the data
+#: then decide between the images.
+SYMMETRY_TOLERANCE_M = 0.5e-3
 
 
 @dataclass(frozen=True)
@@ -350,6 +356,8 @@ class MeshModel:
         Vertex normals (4.13) computed earlier.
     report : MeshReport, optional
         What preparing the mesh did (with ``validate=False``: as recorded then).
+    symmetries : (k, 4, 4) float, optional
+        The rotational symmetries found earlier (see :attr:`symmetries`).
 
     Attributes
     ----------
@@ -368,6 +376,7 @@ class MeshModel:
         candidate_curvatures: CurvatureTable | None = None,
         normals: ArrayLike | None = None,
         report: MeshReport | None = None,
+        symmetries: ArrayLike | None = None,
     ) -> None:
         self.name = name
         self.config = config
@@ -386,6 +395,7 @@ class MeshModel:
         self._dense = candidate_curvatures
         self._field = distance_field
         self._distance: MeshDistance | None = None
+        self._symmetries = None if symmetries is None else np.asarray(symmetries, float)
         self._tree: cKDTree | None = None
         self._cell_keys: dict[float, IntArray] = {}
         self.timings: dict[str, float] = {}
@@ -401,8 +411,6 @@ class MeshModel:
     def table(self) -> CurvatureTable:
         """The lookup table (built on first use: adaptive sampling + paraboloid fits)."""
         if self._table is None:
-            import time
-
             start = time.perf_counter()
             sample = adaptive_sample(self.vertices, self.faces, self.normals, self.config)
             self.timings["sampling_s"] = time.perf_counter() - start
@@ -424,8 +432,6 @@ class MeshModel:
         vertices: the fast mode draws its candidates from this denser map.
         """
         if self._dense is None:
-            import time
-
             start = time.perf_counter()
             _, vertices = np.unique(self.cell_keys(CANDIDATE_SPACING_M), return_index=True)
             parts = [
@@ -443,8 +449,6 @@ class MeshModel:
     def distance_field(self) -> DistanceField:
         """Narrow-band signed distance grid (built on first use)."""
         if self._field is None:
-            import time
-
             start = time.perf_counter()
             self._field = DistanceField.build(
                 self.vertices,
@@ -463,6 +467,20 @@ class MeshModel:
         if self._distance is None:
             self._distance = MeshDistance(self.vertices, self.faces)
         return self._distance
+
+    @property
+    def symmetries(self) -> Array:
+        """The rigid motions (k, 4, 4) other than the identity that map the surface onto
+        itself to within ``SYMMETRY_TOLERANCE_M`` (a gear's turns by one tooth and flips;
+        empty for most objects), model frame; found on first use
+        (:func:`~recognition.surfaces.symmetry.rotational_symmetries`)."""
+        if self._symmetries is None:
+            start = time.perf_counter()
+            self._symmetries = rotational_symmetries(
+                self.vertices, self.faces, self.distance, tolerance_m=SYMMETRY_TOLERANCE_M
+            )
+            self.timings["symmetries_s"] = time.perf_counter() - start
+        return self._symmetries
 
     def cell_keys(self, spacing: float) -> IntArray:
         """(n,) int64 key of the cubic cell (side ``spacing``, metres) of each vertex (cached)."""

@@ -189,6 +189,16 @@ class FastConfig:
         errors; so are those of their first ``polish_poses`` distinct poses whose field
         errors are within ``polish_margin_m`` of their best (the field cannot tell them
         apart), the least exact error winning.
+    equivalent_log_ratio, equivalent_floor_m
+        Two distinct poses of a model are equivalent (equally good answers: a symmetric
+        part, a flat face, a sphere) when the data are at most ``exp(equivalent_log_ratio)``
+        times likelier at the better under Gaussian noise of the effective level, or
+        their errors differ by at most ``equivalent_floor_m``
+        (:class:`~recognition.surfaces.registration.ambiguity.Resolution`).
+    free_motion_m : float
+        The pose is free along a direction (a flat face, a cylinder's axis) when moving
+        it this far along it is not resolved in the same sense, metres; the
+        registration reports how many such directions it has.
     """
 
     mode: ClassVar[RegistrationMode] = RegistrationMode.FAST
@@ -210,6 +220,9 @@ class FastConfig:
     polish_margin_m: float = 0.01e-3
     polish_iterations: int = 3
     polish_poses: int = 4
+    equivalent_log_ratio: float = 3.0
+    equivalent_floor_m: float = 1.0e-6
+    free_motion_m: float = 1.0e-3
 
 
 @dataclass(frozen=True)

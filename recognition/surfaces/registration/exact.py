@@ -6,20 +6,19 @@ import time
 from dataclasses import replace
 
 import numpy as np
+import trimesh
 from numpy.typing import ArrayLike, NDArray
-from scipy.spatial.transform import Rotation
 
-from recognition.least_squares import LeastSquaresConfig, State, damped_least_squares
-from recognition.rigid import cross, pose_matrix
+from recognition.rigid import pose_matrix
+from recognition.surfaces.closest_fit import refine_poses
 from recognition.surfaces.data_curves import DataCurves
 from recognition.surfaces.mesh_model import MeshModel
+from recognition.surfaces.registration.ambiguity import Resolution, distinct_poses
 from recognition.surfaces.registration.result import Registration
 
 __all__ = ["exact_distances_m", "exact_error_m", "polish", "refine_exact", "with_exact_error"]
 
 Array = NDArray[np.float64]
-PoseState = tuple[Array, Array, Array, Array, Array, NDArray[np.int64]]
-"""R, t, the moved points, their distances, closest points and faces: one pose."""
 
 
 def exact_distances_m(model: MeshModel, points: ArrayLike, R: ArrayLike, t: ArrayLike) -> Array:
@@ -46,69 +45,6 @@ def exact_error_m(
     return float(np.mean(np.minimum(exact_distances_m(model, points, R, t), threshold_m)))
 
 
-def _refine_poses(
-    model: MeshModel,
-    points: Array,
-    R: Array,
-    t: Array,
-    iterations: int,
-    tolerance: float,
-    threshold_m: float,
-) -> tuple[Array, Array, Array]:
-    """:func:`refine_exact` for k poses at once: R (k, 3, 3), t (k, 3) -> R, t and the
-    exact distances (k, n) at the results; one closest-point query per step for all."""
-    reach = float(np.max(np.linalg.norm(points - points.mean(axis=0), axis=1)))
-    n = len(points)
-
-    def evaluate(R: Array, t: Array) -> PoseState:
-        X = np.einsum("nj,kij->kni", points, R) + t[:, None, :]
-        distance, q, face = model.distance.closest(X.reshape(-1, 3))
-        k = len(R)
-        return R, t, X, distance.reshape(k, n), q.reshape(k, n, 3), face.reshape(k, n)
-
-    def cost(state: State) -> Array:
-        return np.asarray(np.mean(np.minimum(state[3], threshold_m) ** 2, axis=1))
-
-    def linearize(state: State) -> tuple[Array, Array]:
-        X, distance, q, face = state[2], state[3], state[4], state[5]
-        normals = model.distance.face_normals[face]
-        r = np.einsum("kij,kij->ki", X - q, normals)
-        c = X.mean(axis=1, keepdims=True)
-        J = np.concatenate([cross(X - c, normals), normals], axis=2)
-        outliers = distance > threshold_m
-        return np.where(outliers, 0.0, r), np.where(outliers[..., None], 0.0, J)
-
-    def retract(state: State, step: Array) -> State:
-        R, t, X = state[0], state[1], state[2]
-        c = X.mean(axis=1)
-        dR = Rotation.from_rotvec(step[:, :3]).as_matrix()
-        moved_t = np.einsum("kij,kj->ki", dR, t - c) + c + step[:, 3:]
-        return evaluate(dR @ R, moved_t)
-
-    def step_size(_state: State, step: Array) -> Array:
-        return np.linalg.norm(step[:, :3], axis=1) * reach + np.linalg.norm(step[:, 3:], axis=1)
-
-    result = damped_least_squares(
-        evaluate(np.asarray(R, float), np.asarray(t, float)),
-        cost=cost,
-        linearize=linearize,
-        retract=retract,
-        step_size=step_size,
-        config=LeastSquaresConfig(
-            max_iterations=iterations,
-            initial_damping=1e-6,
-            shrink=0.1,
-            grow=100.0,
-            max_damping=1e6,
-            trace_floor=1e-300,
-            rtol=tolerance,
-            step_tol=1e-7,
-        ),
-    )
-    R_out, t_out, _, distance, _, _ = result.state
-    return R_out, t_out, distance
-
-
 def refine_exact(
     model: MeshModel,
     points: ArrayLike,
@@ -130,8 +66,8 @@ def refine_exact(
     (4.8) at the result (outliers at the threshold), metres; ``points`` (n, 3) and ``t``
     in metres, ``R`` (3, 3).
     """
-    R_out, t_out, distance = _refine_poses(
-        model,
+    R_out, t_out, distance = refine_poses(
+        model.distance,
         np.asarray(points, float),
         np.asarray(R, float)[None],
         np.asarray(t, float)[None],
@@ -151,24 +87,34 @@ def polish(
     iterations: int = 12,
     threshold_m: float | None = None,
     poses: Array | None = None,
+    resolution: Resolution | None = None,
 ) -> Registration:
     """``registration`` polished on exact closest points, with its exact error (4.8).
 
     The poses ``poses`` ((k, 4, 4) T_model_from_data; default the registration's own)
     are refined together by at most ``iterations`` steps of :func:`refine_exact` and the
     one of least exact error is kept; ``poses`` and ``pose_errors_m`` then list the
-    polished poses first, best first. ``point`` ((3,), metres: the data's p, data frame)
-    moves with the pose. Points farther than ``threshold_m`` (default: the
-    registration's ``outlier_threshold_m``) count at it and are reported as outliers.
-    The time taken is added to ``time_s``.
+    distinct polished poses first (:func:`distinct_poses`: those that came to the same
+    answer appear once), best first. ``point`` ((3,), metres: the data's p, data frame;
+    default the data's centroid) moves with the pose. With the data's ``resolution``,
+    the model's symmetric images of the poses (:attr:`MeshModel.symmetries`) are polished
+    with them, the polished poses it cannot tell from the best are ``equivalent_poses``
+    and the directions it leaves the best free along are ``free_motions``. Points farther than
+    ``threshold_m`` (default: the registration's ``outlier_threshold_m``) count at it and
+    are reported as outliers. The time taken is added to ``time_s``.
     """
     if registration.error_is_exact or not np.isfinite(registration.error_m):
         return registration
     start = time.perf_counter()
     threshold = registration.outlier_threshold_m if threshold_m is None else threshold_m
     starts = registration.T_model_from_data[None] if poses is None else np.asarray(poses)
-    R, t, distance = _refine_poses(
-        model,
+    rest = slice(len(starts), None)  # the registration's poses not polished
+    if resolution is not None and len(model.symmetries):
+        # the model's symmetric images of each pose fit the data as well: polished with it
+        images = np.einsum("sij,kjl->skil", model.symmetries, starts).reshape(-1, 4, 4)
+        starts = np.concatenate([starts, images])
+    R, t, distance = refine_poses(
+        model.distance,
         np.asarray(curves.points, float),
         starts[:, :3, :3],
         starts[:, :3, 3],
@@ -177,11 +123,17 @@ def polish(
         threshold,
     )
     errors = np.mean(np.minimum(distance, threshold), axis=1)
-    order = np.argsort(errors, kind="stable")
+    p = np.asarray(curves.points, float).mean(axis=0) if point is None else point
+    order = distinct_poses(R, t, errors, p, len(errors))
     polished = pose_matrix(R[order], t[order])
     best = order[0]
     location = registration.location if point is None else R[best] @ point + t[best]
-    rest = slice(len(starts), None)
+    equivalent, free = 1, 0
+    if resolution is not None:
+        limit = resolution.equivalent_error_m(float(errors[best]))
+        equivalent = int(np.sum(errors[order] <= limit))
+        fit = _inliers_at(model, np.asarray(curves.points, float), R[best], t[best], threshold)
+        free = resolution.free_motions(*fit) if fit is not None else 0
     return replace(
         registration,
         error_m=float(errors[best]),
@@ -192,8 +144,28 @@ def polish(
         outlier_threshold_m=threshold,
         poses=np.concatenate([polished, registration.poses[rest].reshape(-1, 4, 4)]),
         pose_errors_m=np.concatenate([errors[order], registration.pose_errors_m[rest]]),
+        equivalent_poses=equivalent,
+        free_motions=free,
         time_s=registration.time_s + time.perf_counter() - start,
     )
+
+
+def _inliers_at(
+    model: MeshModel, points: Array, R: Array, t: Array, threshold_m: float
+) -> tuple[Array, Array] | None:
+    """The data points within ``threshold_m`` of the model at the pose (R, t), moved, and
+    the model's normals at their closest points, interpolated from its vertex normals
+    (a faceted sphere stays free to turn); None when fewer than six."""
+    moved = points @ R.T + t
+    distance, q, face = model.distance.closest(moved)
+    inliers = distance <= threshold_m
+    if inliers.sum() < 6:
+        return None
+    corners = model.faces[face[inliers]]
+    weights = trimesh.triangles.points_to_barycentric(model.vertices[corners], q[inliers])
+    normals = np.einsum("nk,nki->ni", np.clip(weights, 0.0, 1.0), model.normals[corners])
+    normals /= np.maximum(np.linalg.norm(normals, axis=1, keepdims=True), 1e-12)
+    return moved[inliers], normals
 
 
 def with_exact_error(

@@ -37,6 +37,7 @@ from recognition.surfaces.data_curves import DataCurves
 from recognition.surfaces.distance import FieldStack
 from recognition.surfaces.local_geometry import LocalSurfaceGeometry
 from recognition.surfaces.mesh_model import MeshModel
+from recognition.surfaces.registration.ambiguity import Resolution, distinct_poses
 from recognition.surfaces.registration.config import FastConfig, FastSearchConfig
 from recognition.surfaces.registration.data import (
     acceptable_error_m,
@@ -53,7 +54,7 @@ from recognition.surfaces.registration.result import (
 )
 from recognition.surfaces.registration.superposition import frames, hypotheses
 
-__all__ = ["DISTINCT_ANGLE_RAD", "DISTINCT_RADIUS_M", "register_fast"]
+__all__ = ["register_fast"]
 
 Array = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -67,12 +68,6 @@ class _Poses:
     R: Array
     t: Array
     rms: Array | None = None
-
-
-#: Poses closer than this (p's image, metres) and ...
-DISTINCT_RADIUS_M = 0.5e-3
-#: ... turned less than this from a better pose are near-duplicates.
-DISTINCT_ANGLE_RAD = float(np.deg2rad(3.0))
 
 
 #: With a clip, a start's points count at most this many robust standard deviations of
@@ -199,33 +194,6 @@ def _arm_indices(curves: DataCurves, point: Array, fractions: Sequence[float] | 
             idx.append(offset + max(0, m - max(1, round(f * behind))))
         offset += n
     return np.array(idx, dtype=np.int64)
-
-
-def _distinct(
-    R: Array,
-    t: Array,
-    rms: Array,
-    point: Array,
-    n_keep: int,
-    radius: float = DISTINCT_RADIUS_M,
-    angle: float = DISTINCT_ANGLE_RAD,
-) -> NDArray[np.int64]:
-    """Indices of the ``n_keep`` best poses (least ``rms``), skipping any pose that puts p
-    within ``radius`` of a better kept pose while rotated less than ``angle`` from it."""
-    order = np.argsort(rms, kind="stable")
-    R, location = R[order], R[order] @ point + t[order]
-    near = np.linalg.norm(location[:, None] - location[None], axis=-1) < radius
-    cos_limit = 1 + 2 * np.cos(angle)
-    same = near & (np.einsum("aij,bij->ab", R, R) > cos_limit)
-    alive = np.ones(len(order), bool)
-    kept = []
-    for i in range(len(order)):
-        if alive[i]:
-            kept.append(i)
-            if len(kept) == n_keep:
-                break
-            alive &= ~same[i]
-    return order[np.array(kept, dtype=np.int64)]
 
 
 def _smallest(values: Array, count: int) -> NDArray[np.intp]:
@@ -377,7 +345,7 @@ def _search(
                 continue
             assert p.rms is not None  # refined poses
             start = time.perf_counter()
-            keep = _distinct(p.R, p.t, p.rms, geometry.point, n_keep)
+            keep = distinct_poses(p.R, p.t, p.rms, geometry.point, n_keep)
             out.append(_Poses(p.R[keep], p.t[keep]))
             seconds[w] += time.perf_counter() - start
         return out
@@ -503,7 +471,7 @@ def register_fast(
     if not trusted:
         search = replace(search, tolerance_scale=np.inf, aligned_anisotropy=np.inf)
     first = _search(models, stack, curves, geometry, config, search, which_field, threshold)
-    registrations = _polish(models, curves, geometry, first, config, threshold)
+    registrations = _polish(models, curves, geometry, first, config, threshold, noise)
     acceptable = acceptable_error_m(noise, len(curves.points), config)
     for fallback in config.fallbacks:
         if min(r.error_m for r in registrations) <= acceptable:
@@ -534,7 +502,7 @@ def register_fast(
                 iterations=a.iterations + b.iterations,
                 time_s=a.time_s + b.time_s,
             )
-        registrations = _polish(models, curves, geometry, merged, config, threshold)
+        registrations = _polish(models, curves, geometry, merged, config, threshold, noise)
     return registrations
 
 
@@ -545,9 +513,11 @@ def _polish(
     registrations: Sequence[Registration],
     config: FastConfig,
     threshold_m: float,
+    noise_m: float,
 ) -> list[Registration]:
     """Exact errors, poses polished on closest points (outliers beyond ``threshold_m``
-    left out), for the models that can win.
+    left out), for the models that can win; their poses equivalent under the data's
+    noise ``noise_m`` counted, and the directions it leaves free (:class:`Resolution`).
 
     A model is polished when its distance-field error is within ``polish_ratio`` times
     the best plus ``polish_margin_m``. So are those of its first ``polish_poses`` distinct
@@ -560,6 +530,7 @@ def _polish(
     if not np.isfinite(best):
         return list(registrations)
     limit = config.polish_ratio * best + config.polish_margin_m
+    resolution = Resolution.of(noise_m, len(curves.points), config)
     out = list(registrations)
     for w, reg in enumerate(registrations):
         if reg.error_is_exact or reg.error_m > limit:
@@ -575,5 +546,6 @@ def _polish(
             iterations=config.polish_iterations,
             threshold_m=threshold_m,
             poses=reg.poses[:count] if len(reg.poses) else None,
+            resolution=resolution,
         )
     return out

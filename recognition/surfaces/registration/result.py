@@ -88,6 +88,16 @@ class Registration:
         each.
     pose_errors_m : (k,) float
         Their errors (4.8), metres, exact where ``error_is_exact``.
+    equivalent_poses : int
+        The first this many ``poses`` fit the data equally well (within what the data's
+        noise resolves, :attr:`FastConfig.equivalent_log_ratio`): distinct answers that
+        the data cannot tell apart (a symmetric part, a flat face, a sphere), the
+        registration's own among them. 1: no other pose found fits as well.
+    free_motions : int
+        Degrees of freedom (0-6) of the pose that the data leave free (a flat face: 3, a
+        cylinder: 1, a sphere: 3; see
+        :meth:`~recognition.surfaces.registration.ambiguity.Resolution.free_motions`):
+        the pose could slide or turn that way by a millimetre and fit as well.
     """
 
     model: str
@@ -105,6 +115,23 @@ class Registration:
     outlier_threshold_m: float = float("inf")
     poses: NDArray[np.float64] = field(default_factory=lambda: np.zeros((0, 4, 4)))
     pose_errors_m: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0))
+    equivalent_poses: int = 1
+    free_motions: int = 0
+
+    @property
+    def equivalent_locations(self) -> NDArray[np.float64]:
+        """Where each of the ``equivalent_poses`` puts the data's p, (k, 3) model frame,
+        metres (the registration's own ``location`` first)."""
+        T = self.T_model_from_data
+        p = T[:3, :3].T @ (self.location - T[:3, 3])
+        poses = self.poses[: self.equivalent_poses] if len(self.poses) else T[None]
+        return np.asarray(poses[:, :3, :3] @ p + poses[:, :3, 3], dtype=np.float64)
+
+    @property
+    def ambiguous(self) -> bool:
+        """True when the data do not fix the pose: other distinct poses fit as well, or
+        the pose is free along some direction."""
+        return self.equivalent_poses > 1 or self.free_motions > 0
 
     @property
     def rejected(self) -> bool:

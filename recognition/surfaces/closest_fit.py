@@ -1,0 +1,84 @@
+"""Rigid poses fitted on a mesh's exact closest points (the polish of every registration,
+and the symmetry search of a model)."""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.spatial.transform import Rotation
+
+from recognition.least_squares import LeastSquaresConfig, State, damped_least_squares
+from recognition.rigid import cross
+from recognition.surfaces.distance import MeshDistance
+
+__all__ = ["refine_poses"]
+
+Array = NDArray[np.float64]
+PoseState = tuple[Array, Array, Array, Array, Array, NDArray[np.int64]]
+"""R, t, the moved points, their distances, closest points and faces: one pose."""
+
+
+def refine_poses(
+    distance_to: MeshDistance,
+    points: Array,
+    R: Array,
+    t: Array,
+    iterations: int,
+    tolerance: float,
+    threshold_m: float,
+) -> tuple[Array, Array, Array]:
+    """Poses R (k, 3, 3), t (k, 3) of the points (n, 3) refined on exact closest points
+    of a mesh: Levenberg-Marquardt on point-to-plane residuals, each point counted at most
+    ``threshold_m``; one closest-point query per step for all poses. Returns R, t and the
+    exact distances (k, n) at the results (see
+    :func:`~recognition.surfaces.registration.exact.refine_exact`)."""
+    reach = float(np.max(np.linalg.norm(points - points.mean(axis=0), axis=1)))
+    n = len(points)
+
+    def evaluate(R: Array, t: Array) -> PoseState:
+        X = np.einsum("nj,kij->kni", points, R) + t[:, None, :]
+        distance, q, face = distance_to.closest(X.reshape(-1, 3))
+        k = len(R)
+        return R, t, X, distance.reshape(k, n), q.reshape(k, n, 3), face.reshape(k, n)
+
+    def cost(state: State) -> Array:
+        return np.asarray(np.mean(np.minimum(state[3], threshold_m) ** 2, axis=1))
+
+    def linearize(state: State) -> tuple[Array, Array]:
+        X, distance, q, face = state[2], state[3], state[4], state[5]
+        normals = distance_to.face_normals[face]
+        r = np.einsum("kij,kij->ki", X - q, normals)
+        c = X.mean(axis=1, keepdims=True)
+        J = np.concatenate([cross(X - c, normals), normals], axis=2)
+        outliers = distance > threshold_m
+        return np.where(outliers, 0.0, r), np.where(outliers[..., None], 0.0, J)
+
+    def retract(state: State, step: Array) -> State:
+        R, t, X = state[0], state[1], state[2]
+        c = X.mean(axis=1)
+        dR = Rotation.from_rotvec(step[:, :3]).as_matrix()
+        moved_t = np.einsum("kij,kj->ki", dR, t - c) + c + step[:, 3:]
+        return evaluate(dR @ R, moved_t)
+
+    def step_size(_state: State, step: Array) -> Array:
+        return np.linalg.norm(step[:, :3], axis=1) * reach + np.linalg.norm(step[:, 3:], axis=1)
+
+    result = damped_least_squares(
+        evaluate(np.asarray(R, float), np.asarray(t, float)),
+        cost=cost,
+        linearize=linearize,
+        retract=retract,
+        step_size=step_size,
+        config=LeastSquaresConfig(
+            max_iterations=iterations,
+            initial_damping=1e-6,
+            shrink=0.1,
+            grow=100.0,
+            max_damping=1e6,
+            trace_floor=1e-300,
+            rtol=tolerance,
+            step_tol=1e-7,
+        ),
+    )
+    R_out, t_out, _, distance, _, _ = result.state
+    return R_out, t_out, distance
