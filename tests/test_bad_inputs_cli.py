@@ -55,6 +55,14 @@ CASES = [
     ("probe", "--json {tmp}", "--json {tmp}: {tmp} is a directory; expected a file"),
     ("probe", "--json {file}/summary.json", "--json {file}/summary.json: cannot create"),
     ("probe", "--object unicorn --out {tmp}", "unknown object 'unicorn'; known objects: pear"),
+    ("probe", "--mesh {tmp}/missing.ply", "--mesh {tmp}/missing.ply is not a file"),
+    ("probe", "--mesh {tmp}", "is not a file"),
+    ("probe", "--units furlong", "argument --units: invalid choice: 'furlong'"),
+    ("probe", "--database {tmp}", "is not a saved model database (no manifest.json)"),
+    # user_meshes.py
+    ("user_meshes", "{file}", "is a file; expected a directory"),
+    ("user_meshes", "{tmp} --units ft", "argument --units: invalid choice: 'ft'"),
+    ("user_meshes", "{tmp} --seed -2", "argument --seed: expected an integer >= 0, got -2"),
     # replay.py
     ("replay", "{tmp}", "is a directory; expected an .rrd recording file"),
     ("replay", "{tmp}/missing.rrd", "the file does not exist"),

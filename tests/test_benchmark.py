@@ -428,6 +428,34 @@ def test_user_meshes_in_millimetres_are_benchmarked(
     assert "building a database" not in capsys.readouterr().out
 
 
+def test_an_edited_mesh_or_another_folder_of_the_same_name_never_reuses_records(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    first, second = tmp_path / "a" / "meshes", tmp_path / "b" / "meshes"
+    first.parent.mkdir()
+    second.parent.mkdir()
+    _write_user_meshes(first)
+    _write_user_meshes(second)
+    blob(subdivisions=4).apply_scale(1.1e3).export(second / "blob.stl")  # the same name
+    argv = ["--units", "mm", "--per-model", "1", "--method", "fast", "--workers", "1"]
+    argv += ["--out-dir", str(tmp_path / "out")]
+
+    def run_on(folder: Path) -> tuple[str, list[dict]]:
+        assert run_cli(lambda: run(_mesh_config(tmp_path, ["--mesh-dir", str(folder), *argv]))) == 0
+        files = sorted((tmp_path / "runs" / "benchmark").rglob("*.jsonl"))
+        return capsys.readouterr().out, files
+
+    out, files = run_on(first)
+    assert "building a database of 2 meshes" in out and len(files) == 1
+    out, files = run_on(second)
+    assert "building a database of 2 meshes" in out and len(files) == 2  # its own records
+    ellipsoid(subdivisions=4).apply_scale(0.9e3).export(first / "egg.ply")  # edited in place
+    out, files = run_on(first)
+    assert "building a database of 2 meshes" in out and len(files) == 3
+    out, files = run_on(first)
+    assert "building a database" not in out and len(files) == 3  # unchanged: reused
+
+
 def test_millimetre_meshes_read_as_metres_are_named(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
