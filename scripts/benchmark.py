@@ -8,9 +8,7 @@ python scripts/benchmark.py --backend ray --ray-address auto --workers 8
 python scripts/benchmark.py --source sim --json out.json   # simulated robot: Tables 4.5-4.7
 python scripts/benchmark.py --source sim --experiment catalog --sessions 1 --method fast
 python scripts/benchmark.py --source sim --mesh-dir my_meshes --units mm   # your objects, probed
-python scripts/benchmark.py --out-dir docs/benchmarks     # the committed reports
-
-Reports go to runs/benchmark/ unless --out-dir says otherwise.
+python scripts/benchmark.py --out-dir docs/benchmarks     # the committed reports (else runs/)
 """
 
 from __future__ import annotations
