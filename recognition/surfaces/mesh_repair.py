@@ -51,6 +51,19 @@ COARSE = 25.0
 MAX_FACES = 400_000
 
 
+def _split_size(longest: np.ndarray, max_edge_m: float, max_faces: int) -> float:
+    """The smallest edge length, from ``max_edge_m`` up in doublings, to which splitting
+    keeps the mesh within ``max_faces`` triangles: each triangle of longest edge L splits
+    in four per halving, 4^ceil(log2(L / size)) pieces (a fan of long slivers, like a
+    tessellated cylinder, would otherwise become millions)."""
+    size = max_edge_m
+    while True:
+        halvings = np.ceil(np.log2(np.maximum(longest / size, 1.0)))
+        if float(np.sum(4.0**halvings)) <= max_faces:
+            return size
+        size *= 2
+
+
 @dataclass(frozen=True)
 class MeshReport:
     """What was done to a mesh to make it a model (all counts; lengths in metres).
@@ -260,9 +273,11 @@ def prepare_mesh(
     # only a few long edges: split them to a working resolution
     split = bool(np.percentile(edges, 90) > max(max_edge_m, diagonal / COARSE))
     if split:
-        v, f = trimesh.remesh.subdivide_to_size(m.vertices, m.faces, max_edge=max_edge_m)
+        longest = np.asarray(m.edges_unique_length[m.faces_unique_edges].max(axis=1))
+        size = _split_size(longest, max_edge_m, max_faces)
+        v, f = trimesh.remesh.subdivide_to_size(m.vertices, m.faces, max_edge=size)
         notes.append(
-            f"split edges longer than {max_edge_m * 1e3:g} mm (longest "
+            f"split edges longer than {size * 1e3:g} mm (longest "
             f"{edges.max() * 1e3:.3g} mm): {len(m.faces)} -> {len(f)} triangles"
         )
         m = trimesh.Trimesh(v, f, process=False)

@@ -220,7 +220,9 @@ def cad_part(seed: int, vertices: int = TARGET_VERTICES) -> trimesh.Trimesh:
 def dense_mesh(faces: int = 2_000_000) -> trimesh.Trimesh:
     """A torus of about ``faces`` triangles (a photogrammetry-sized mesh)."""
     minor = int(np.sqrt(faces / 8))
-    return trimesh.creation.torus(0.03, 0.012, major_sections=4 * minor, minor_sections=minor)
+    # made at unit size: at metre scale trimesh merges the rings of a fine revolve away
+    torus = trimesh.creation.torus(1.0, 0.4, major_sections=4 * minor, minor_sections=minor)
+    return torus.apply_scale(0.03)
 
 
 def user_mesh_set(seed: int = 0) -> dict[str, trimesh.Trimesh]:
