@@ -37,17 +37,29 @@ from recognition.curves.recognition.signature_fit import canonical_parameters
 from recognition.curves.recognition.tree import (
     COMPLEXITY_FACTOR,
     DEFAULT_TOLERANCE,
+    estimated_uncertainty,
     fit_class,
     recognize_curve,
     recognize_points,
 )
+from recognition.curves.recognition.uncertainty import (
+    DEFAULT_SIGNIFICANCE,
+    EXACT_PRECISION,
+    InputUncertainty,
+    consistency_test,
+)
 
 __all__ = [
     "COMPLEXITY_FACTOR",
+    "DEFAULT_SIGNIFICANCE",
     "DEFAULT_TOLERANCE",
+    "EXACT_PRECISION",
     "ClassFit",
     "CurveRecognition",
+    "InputUncertainty",
     "canonical_parameters",
+    "consistency_test",
+    "estimated_uncertainty",
     "fit_class",
     "recognize_curve",
     "recognize_points",

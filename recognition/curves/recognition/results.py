@@ -24,7 +24,8 @@ class ClassFit:
     params : tuple of float
         Canonical shape parameters (empty when the class was rejected outright).
     residual : float
-        Reduced relative residual of the refined fit; ``inf`` when rejected.
+        Reduced RMS of the standardised residuals of the refined fit (divided by the
+        degrees of freedom left); ``inf`` when rejected.
     t : (m,) float
         Contact parameter of each estimate in the canonical form.
     psi : float or None
@@ -39,6 +40,16 @@ class ClassFit:
         Each point's residual norm in the final fit (of the points used).
     outliers : tuple of int
         Points left out as estimation outliers (their t is NaN).
+    statistic : float
+        Sum of the squared standardised residuals (chi-square statistic); ``inf`` when
+        rejected.
+    scale, dof : float
+        For data of this class with errors as stated, ``statistic`` is distributed as
+        ``scale * chi2(dof)`` (``scale`` 1 and ``dof`` residuals minus unknowns for
+        independent errors).
+    p_value : float
+        Probability of a statistic at least this large for data of this class; 0 when
+        rejected, NaN when no degree of freedom is left.
     """
 
     kind: CurveKind
@@ -51,6 +62,10 @@ class ClassFit:
     message: str = ""
     per_point: np.ndarray | None = None
     outliers: tuple[int, ...] = ()
+    statistic: float = float("inf")
+    scale: float = 1.0
+    dof: float = float("nan")
+    p_value: float = 0.0
 
     @property
     def parameters(self) -> dict[str, float]:
@@ -78,7 +93,19 @@ class CurveRecognition:
         Consistency residual of the recognised class (``inf`` if unclassified).
     candidates : tuple of ClassFit
         Every hypothesis tested, in tree order.
-    tolerance : float
+    tolerance : float or None
+        The reduced-residual tolerance of the decision, when one was given instead of
+        the input uncertainty.
+    statistic : float
+        Chi-square statistic of the recognised class (``inf`` if unclassified).
+    p_value : float
+        Its p-value (:attr:`ClassFit.p_value`); 0 if unclassified.
+    significance : float
+        Significance of the consistency test: a class is consistent when its p-value is
+        at least this.
+    runner_up : ClassFit or None
+        The next-best class: the best-fitting of the others (the best of all when
+        unclassified).
     """
 
     kind: CurveKind
@@ -88,7 +115,11 @@ class CurveRecognition:
     spread: dict[str, float]
     residual: float
     candidates: tuple[ClassFit, ...]
-    tolerance: float
+    tolerance: float | None
+    statistic: float = float("inf")
+    p_value: float = 0.0
+    significance: float = float("nan")
+    runner_up: ClassFit | None = None
 
     @property
     def fit(self) -> ClassFit | None:
