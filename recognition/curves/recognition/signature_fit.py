@@ -385,7 +385,10 @@ def _class_fit(
     """The ClassFit of one refined solution: canonical shape, statistics, per-point residual."""
     kind, data = problem.kind, problem.data
     n_p, head = problem.n_p, problem.head
-    params, t, orientation = canonical_form(kind, tuple(float(v) for v in x[:n_p]), x[head:], sigma)
+    psi = float(x[n_p]) if problem.use_psi else 0.0
+    params, t, orientation, psi = canonical_form(
+        kind, tuple(float(v) for v in x[:n_p]), x[head:], sigma, psi
+    )
     _, J = problem.linearize(x[None], np.array([sigma]))
     with np.errstate(all="ignore"):
         statistic, scale, dof, p_value = consistency_test(r, J[0], data.residual_correlation)
@@ -394,7 +397,7 @@ def _class_fit(
         params,
         float(reduced_rms(r, x.size)),
         t.copy(),
-        float(np.mod(x[n_p], 2 * np.pi)) if problem.use_psi else None,
+        float(np.mod(psi, 2 * np.pi)) if problem.use_psi else None,
         int(orientation),
         invariants,
         per_point=np.sqrt(np.sum(r.reshape(-1, data.m) ** 2, axis=0)),
@@ -536,22 +539,28 @@ def _screen_and_refine(
 
 
 def canonical_form(
-    kind: CurveKind, params: tuple[float, ...], t: np.ndarray, sigma: float
-) -> tuple[tuple[float, ...], np.ndarray, float]:
-    """Report equivalent shapes one way: (a, b) positive for conics, a > 0 for x = t^2 classes.
+    kind: CurveKind, params: tuple[float, ...], t: np.ndarray, sigma: float, psi: float = 0.0
+) -> tuple[tuple[float, ...], np.ndarray, float, float]:
+    """Report equivalent shapes one way: (a, b) positive for conics with a >= b for the
+    ellipse, a > 0 for the x = t^2 classes; returns shape, contacts, orientation and psi.
 
     ``x = t^2, y = a t^3 + b t^2 + c t`` with ``t -> -t`` is the same curve with
-    (-a, b, -c), traversed the other way; for the semi-cubical parabola (-a, b).
+    (-a, b, -c), traversed the other way; for the semi-cubical parabola (-a, b). The
+    ellipse (a cos t, b sin t) with a < b is (b cos t', a sin t') in a frame turned by
+    -pi/2, with t' = t - pi/2 (and psi less pi/2).
     """
     p = list(params)
     if kind in (CurveKind.PARABOLA, CurveKind.ELLIPSE, CurveKind.HYPERBOLA):
         p = [abs(v) for v in p]
+        if kind is CurveKind.ELLIPSE and p[1] > p[0]:
+            p = [p[1], p[0]]
+            t, psi = t - np.pi / 2, psi - np.pi / 2
     elif kind in (CurveKind.SEMICUBICAL_PARABOLA, CurveKind.CUBIC_SPLINE) and p[0] < 0:
         p[0] = -p[0]
         if kind is CurveKind.CUBIC_SPLINE:
             p[2] = -p[2]
         t, sigma = -t, -sigma
-    return tuple(p), t, sigma
+    return tuple(p), t, sigma, psi
 
 
 def canonical_parameters(kind: CurveKind | str, params: Sequence[float]) -> tuple[float, ...]:
