@@ -7,14 +7,19 @@ tree reports it; the mirror image has -b). Along that curve three quantities do 
 depend on the motion, the scale or the direction of traversal: ``q = kappa_s / kappa^2``
 at a point, the ratio of the curvatures at two points and the tangent's turn between
 them (thesis Eqs. (3.1)-(3.2) and (3.29)). The table holds kappa, kappa_s and the
-tangent angle on a grid of (b, p) and t; a contact's q picks the points of each tabled
+tangent angle on a grid of shapes and of t; a contact's q picks the points of each tabled
 shape where it can lie, the other contacts' curvature ratios and turns score the shape,
 and the best cells (local minima over the grid) are the starts of the least-squares fit.
 
+The grid follows the shapes' geometry. ``y' = 3t^2 + 2bt + p`` turns at the inflection
+``t = -b/3``, and for large |b| the visible piece there is close to a cubical parabola
+whose slope parameter is ``(p - b^2/3) / |b|`` up to a constant: so b runs over sinh of a
+uniform grid (up to ``sinh(B_EXTENT)``), ``p = b^2/3 + r w`` with r on an arctan-uniform
+grid and ``w = sqrt(1 + b^2/9)``, and t over ``-b/3 + w tan(u)`` with u uniform.
+
 Unlike the closed form of one contact and its parameter (THESIS_ERRATA item 7), which
 maps a small error in the rotation to a large one in the shape near the vertex, the
-table's errors are bounded by its cell size in shape space; fits from the best cells
-found every one of 300 random exact splines in the tests of this package.
+table's errors are bounded by its cell size in shape space.
 """
 
 from __future__ import annotations
@@ -25,6 +30,7 @@ from functools import lru_cache
 import numpy as np
 
 __all__ = [
+    "B_EXTENT",
     "PARAMETER_GRID",
     "ROOTS_PER_SHAPE",
     "SEARCH_CONTACTS",
@@ -35,11 +41,11 @@ __all__ = [
     "spline_starts",
 ]
 
-#: Values of b and of p = ac in the table (each on arctan-uniform grids over the reals).
+#: Values of b and of r (module docstring) in the table.
 SHAPE_GRID = 48
 #: The table's b runs over sinh of a uniform grid on [-B_EXTENT, B_EXTENT].
-B_EXTENT = 7.0
-#: Values of the curve parameter t of the table (arctan-uniform over the reals).
+B_EXTENT = 9.0
+#: Values of the curve parameter t of the table.
 PARAMETER_GRID = 128
 #: Points of one tabled shape kept where a contact's q can lie.
 ROOTS_PER_SHAPE = 6
@@ -58,10 +64,12 @@ class SplineShapeTable:
 
     Attributes
     ----------
-    b, p : (nb,), (np,) float
-        The tabled shapes.
-    t : (nt,) float
-        The tabled curve parameters.
+    b : (nb,) float
+        The tabled values of b.
+    p : (nb, nr) float
+        The tabled values of p for each b.
+    t : (nb, nt) float
+        The tabled curve parameters for each b.
     kappa, kappa_s : (nb, np, nt) float
         Curvature and its arc-length derivative for increasing t, thesis Eqs. (3.1)-(3.2).
     theta : (nb, np, nt) float
