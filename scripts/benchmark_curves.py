@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import platform
 import sys
 import time
@@ -93,7 +94,8 @@ def run(config: CurveBenchmarkConfig) -> dict[str, object]:
         "command": "python scripts/benchmark_curves.py " + " ".join(sys.argv[1:]),
         "date": datetime.now(UTC).isoformat(timespec="seconds"),
         "machine": f"{platform.machine()} {platform.processor() or ''} {platform.system()} "
-        f"python {platform.python_version()}",
+        f"python {platform.python_version()}, {os.cpu_count()} cores, load average "
+        f"{os.getloadavg()[0]:.1f} at the start",
         "config": {k: str(v) if isinstance(v, Path) else v for k, v in asdict(config).items()},
         "classes": per_class,
         "all": {
