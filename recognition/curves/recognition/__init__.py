@@ -32,8 +32,11 @@ Every class hypothesis is initialised from the thesis's invariants and then refi
 :class:`CurveRecognition` (the decision), in :mod:`.results`.
 """
 
-from recognition.curves.recognition.results import ClassFit, CurveRecognition
-from recognition.curves.recognition.signature_fit import canonical_parameters
+from recognition.curves.recognition.results import (
+    ClassFit,
+    CurveRecognition,
+    canonical_parameters,
+)
 from recognition.curves.recognition.tree import (
     COMPLEXITY_FACTOR,
     DEFAULT_TOLERANCE,

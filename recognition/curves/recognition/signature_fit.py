@@ -27,7 +27,7 @@ from recognition.curves.families import (
     canonical_derivatives,
     derivative_terms,
 )
-from recognition.curves.recognition.results import ClassFit
+from recognition.curves.recognition.results import ClassFit, canonical_form
 from recognition.curves.recognition.uncertainty import (
     InputUncertainty,
     consistency_test,
@@ -52,8 +52,6 @@ __all__ = [
     "Guess",
     "acceptance_statistic",
     "best_fit",
-    "canonical_form",
-    "canonical_parameters",
     "contact_data",
     "initial_guess",
     "precise",
@@ -536,37 +534,6 @@ def _screen_and_refine(
         active[rows] = better & (cost_new < PROGRESS * cost[rows]) & (cost_new > 0)
         cost[rows[better]] = cost_new[better]
     return X, R, order
-
-
-def canonical_form(
-    kind: CurveKind, params: tuple[float, ...], t: np.ndarray, sigma: float, psi: float = 0.0
-) -> tuple[tuple[float, ...], np.ndarray, float, float]:
-    """Report equivalent shapes one way: (a, b) positive for conics with a >= b for the
-    ellipse, a > 0 for the x = t^2 classes; returns shape, contacts, orientation and psi.
-
-    ``x = t^2, y = a t^3 + b t^2 + c t`` with ``t -> -t`` is the same curve with
-    (-a, b, -c), traversed the other way; for the semi-cubical parabola (-a, b). The
-    ellipse (a cos t, b sin t) with a < b is (b cos t', a sin t') in a frame turned by
-    -pi/2, with t' = t - pi/2 (and psi less pi/2).
-    """
-    p = list(params)
-    if kind in (CurveKind.PARABOLA, CurveKind.ELLIPSE, CurveKind.HYPERBOLA):
-        p = [abs(v) for v in p]
-        if kind is CurveKind.ELLIPSE and p[1] > p[0]:
-            p = [p[1], p[0]]
-            t, psi = t - np.pi / 2, psi - np.pi / 2
-    elif kind in (CurveKind.SEMICUBICAL_PARABOLA, CurveKind.CUBIC_SPLINE) and p[0] < 0:
-        p[0] = -p[0]
-        if kind is CurveKind.CUBIC_SPLINE:
-            p[2] = -p[2]
-        t, sigma = -t, -sigma
-    return tuple(p), t, sigma, psi
-
-
-def canonical_parameters(kind: CurveKind | str, params: Sequence[float]) -> tuple[float, ...]:
-    """The representative of a shape's equivalent parameter sets that the tree reports."""
-    kind = CurveKind(kind)
-    return canonical_form(kind, tuple(float(v) for v in params), np.zeros(0), 1.0)[0]
 
 
 def rejected(kind: CurveKind, message: str) -> ClassFit:
