@@ -3,10 +3,10 @@ of ``tests/testing_curves.py`` (written apart from the library): exact local geo
 contacts, random rigid motion, mirror and direction of traversal.
 
 With the inputs' uncertainty set to their precision (relative 1e-9: the closed-form
-values are exact to rounding), every class but the cubic spline is recognised in at least
-99 % of the cases and curves of no class are left unclassified in at least 99 %; the
-cubic spline is recognised in 92.5 % (``SPLINE_SHORTFALL``), and its parameters are
-recovered to better than 1e-6 (relative to the parameter vector) wherever it is.
+values are exact to rounding), every class is recognised in at least 99 % of the cases
+and curves of no class are left unclassified in at least 99 %; the cubic spline's
+parameters are recovered to better than 1e-6 (relative to the parameter vector) wherever
+it is recognised.
 """
 
 from __future__ import annotations
@@ -76,23 +76,8 @@ def test_exact_geometry_of_a_few_random_curves(kind: str) -> None:
     assert all(e < 1e-6 for e in errors), max(errors)
 
 
-#: The cubic spline's fit does not yet converge on every nearly cubical-parabola shape
-#: (canonical |b| in the hundreds or more, where (a, b, c) is ill-conditioned): 92.5 % of
-#: 200 with this seed.
-SPLINE_SHORTFALL = pytest.mark.xfail(
-    reason="the spline fit misses some nearly cubical-parabola shapes (92.5 % of 200)",
-    strict=False,
-)
-
-
 @pytest.mark.slow
-@pytest.mark.parametrize(
-    "kind",
-    [
-        pytest.param(k, marks=SPLINE_SHORTFALL) if k == "cubic_spline" else k
-        for k in MEMBER_KINDS + NON_MEMBER_KINDS
-    ],
-)
+@pytest.mark.parametrize("kind", MEMBER_KINDS + NON_MEMBER_KINDS)
 def test_exact_geometry_of_200_random_curves(kind: str) -> None:
     """200 random curves per class and per kind of non-member: at least 99 % decided
     correctly; spline parameters within 1e-6 wherever the spline is recognised."""

@@ -3,8 +3,9 @@
 Parabola: I_p (3.10). Ellipse/hyperbola: I_c1, I_c2 by the regression form of
 (3.17)/(3.23), sign of I_c1. Cubical and semi-cubical parabola: the slope quartics (3.31)
 and (3.34) at two points, slope propagation (3.29), then I_cp1/I_cp2 (3.27)-(3.28) or
-I_scp1/I_scp2 (3.32)-(3.33) at every point. Cubic spline (3.35): the best cells of a
-table of its shapes up to similarity (:mod:`.spline_search`). Contact parameters t from
+I_scp1/I_scp2 (3.32)-(3.33) at every point. Cubic spline (3.35): every spline through
+two contacts, by elimination (:mod:`.spline_solve`), and on imprecise data also the best
+cells of a table of its shapes up to similarity (:mod:`.spline_search`). Contact parameters t from
 Section 3.3.1 with the corrections of errata item 5.
 """
 
@@ -27,11 +28,13 @@ from recognition.curves.recognition.signature_fit import (
     rejected,
 )
 from recognition.curves.recognition.spline_search import spline_starts
+from recognition.curves.recognition.spline_solve import spline_candidates
 from recognition.errors import DegenerateGeometry, InvalidCurveData, NoRealSolution
 
 __all__ = [
     "SMALL_KAPPA_FRACTION",
     "SPLINE_REFINED",
+    "SPLINE_REFINED_PRECISE",
     "Test",
     "fit_conics",
     "fit_cubic_spline",
@@ -44,8 +47,10 @@ __all__ = [
 #: Estimates whose |kappa| is below this fraction of the largest are left out of the
 #: conic invariants, which divide by kappa (inflections are not conic points).
 SMALL_KAPPA_FRACTION = 1e-3
-#: Starting shapes of the cubic spline refined together.
+#: Starting shapes of the cubic spline refined together; on precise data the splines
+#: through two contacts are exact and the fewer best of them suffice.
 SPLINE_REFINED = 12
+SPLINE_REFINED_PRECISE = 3
 #: Starts of a class from kappa and phi alone (:mod:`.angle_search`), added on imprecise
 #: data, and the guesses of such a class refined.
 ANGLE_STARTS = 6
@@ -245,20 +250,41 @@ def fit_semicubical_parabola(data: ContactData, test: Test = Test()) -> ClassFit
     return _refine(kind, guesses, data, message, test, n)
 
 
+def _spline_pairs(m: int) -> list[tuple[int, int]]:
+    """Pairs of contacts that fix the spline's candidates: the first and the last; on
+    more contacts also the first and the middle, the middle and the last."""
+    pairs = [(0, m - 1)]
+    if m > 3:
+        pairs += [(0, m // 2), (m // 2, m - 1)]
+    return pairs
+
+
 def fit_cubic_spline(data: ContactData, test: Test = Test()) -> ClassFit:
-    """The cubic spline (3.35) from the best cells of the table of its shapes up to
-    similarity (:func:`~.spline_search.spline_starts`), refined together; g of thesis
-    Eq. (3.44) at the solution is reported as its invariant."""
+    """The cubic spline (3.35) from every spline through two contacts
+    (:func:`~.spline_solve.spline_candidates`, by elimination) and, on imprecise data,
+    the best cells of the table of its shapes up to similarity
+    (:func:`~.spline_search.spline_starts`), refined together; g of thesis Eq. (3.44) at
+    the solution is reported as its invariant."""
     kind = CurveKind.CUBIC_SPLINE
-    starts = spline_starts(data.kappa, data.kappa_s, data.measured_phi, SPLINE_REFINED)
+    phi = data.measured_phi
     guesses = []
-    for params, t, psi, sigma in zip(
-        starts.params, starts.t, starts.psi, starts.sigma, strict=True
-    ):
-        guesses.append(Guess(tuple(float(v) for v in params), t, float(psi), float(sigma), {}))
-    # the table's starts are approximate: every one is refined, whatever the test
+    for pair in _spline_pairs(data.m):
+        found = spline_candidates(data.kappa, data.kappa_s, phi, pair)
+        for params, t, psi, sigma in zip(
+            found.params, found.t, found.psi, found.sigma, strict=True
+        ):
+            guesses.append(Guess(tuple(float(v) for v in params), t, float(psi), float(sigma), {}))
+    n_refined, gate = SPLINE_REFINED_PRECISE, test
+    if not precise(data):
+        n_refined, gate = SPLINE_REFINED, Test()
+        starts = spline_starts(data.kappa, data.kappa_s, phi, SPLINE_REFINED)
+        for params, t, psi, sigma in zip(
+            starts.params, starts.t, starts.psi, starts.sigma, strict=True
+        ):
+            guesses.append(Guess(tuple(float(v) for v in params), t, float(psi), float(sigma), {}))
+    # on imprecise data the starts are approximate: every one is refined, whatever the test
     message = "no spline shape is consistent with the contacts"
-    fit = _refine(kind, guesses, data, message, Test(), SPLINE_REFINED)
+    fit = _refine(kind, guesses, data, message, gate, n_refined)
     if fit.params and fit.psi is not None:
         a, b, _ = fit.params
         lam = np.tan(data.measured_phi + fit.psi)
