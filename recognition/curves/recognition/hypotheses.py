@@ -20,6 +20,7 @@ from recognition.curves.families import SLOPE_CLASSES, CurveKind
 from recognition.curves.recognition.angle_search import angle_starts
 from recognition.curves.recognition.results import ClassFit
 from recognition.curves.recognition.signature_fit import (
+    SIGNATURE_SOLVER,
     ContactData,
     Guess,
     initial_guess,
@@ -30,10 +31,12 @@ from recognition.curves.recognition.signature_fit import (
 from recognition.curves.recognition.spline_search import spline_starts
 from recognition.curves.recognition.spline_solve import spline_candidates
 from recognition.errors import DegenerateGeometry, InvalidCurveData, NoRealSolution
+from recognition.least_squares import LeastSquaresConfig
 
 __all__ = [
     "SMALL_KAPPA_FRACTION",
     "SPLINE_REFINED",
+    "PRECISE_SPLINE_SOLVER",
     "SPLINE_REFINED_PRECISE",
     "Test",
     "fit_conics",
@@ -51,6 +54,10 @@ SMALL_KAPPA_FRACTION = 1e-3
 #: through two contacts are exact and the fewer best of them suffice.
 SPLINE_REFINED = 12
 SPLINE_REFINED_PRECISE = 3
+#: On precise data those starts are exact for a spline, whose fit stops at once; the
+#: iterations only measure how far a curve of no class is from every spline, and stop
+#: when a step lowers the cost by less than 1e-3 of it, or after 25 iterations.
+PRECISE_SPLINE_SOLVER = replace(SIGNATURE_SOLVER, rtol=1e-3, max_iterations=25)
 #: Starts of a class from kappa and phi alone (:mod:`.angle_search`), added on imprecise
 #: data, and the guesses of such a class refined.
 ANGLE_STARTS = 6
@@ -96,8 +103,11 @@ def _refine(
     message: str,
     test: Test,
     n_refined: int = 2,
+    solver: LeastSquaresConfig = SIGNATURE_SOLVER,
 ) -> ClassFit:
-    return refine_best(kind, guesses, data, message, n_refined, test.significance, test.tolerance)
+    return refine_best(
+        kind, guesses, data, message, n_refined, test.significance, test.tolerance, solver
+    )
 
 
 def fit_parabola(data: ContactData, test: Test = Test()) -> ClassFit:
@@ -274,9 +284,9 @@ def fit_cubic_spline(data: ContactData, test: Test = Test()) -> ClassFit:
             found.params, found.t, found.psi, found.sigma, strict=True
         ):
             guesses.append(Guess(tuple(float(v) for v in params), t, float(psi), float(sigma), {}))
-    n_refined, gate = SPLINE_REFINED_PRECISE, test
+    n_refined, gate, solver = SPLINE_REFINED_PRECISE, test, PRECISE_SPLINE_SOLVER
     if not precise(data):
-        n_refined, gate = SPLINE_REFINED, Test()
+        n_refined, gate, solver = SPLINE_REFINED, Test(), SIGNATURE_SOLVER
         starts = spline_starts(data.kappa, data.kappa_s, phi, SPLINE_REFINED)
         for params, t, psi, sigma in zip(
             starts.params, starts.t, starts.psi, starts.sigma, strict=True
@@ -284,7 +294,7 @@ def fit_cubic_spline(data: ContactData, test: Test = Test()) -> ClassFit:
             guesses.append(Guess(tuple(float(v) for v in params), t, float(psi), float(sigma), {}))
     # on imprecise data the starts are approximate: every one is refined, whatever the test
     message = "no spline shape is consistent with the contacts"
-    fit = _refine(kind, guesses, data, message, gate, n_refined)
+    fit = _refine(kind, guesses, data, message, gate, n_refined, solver)
     if fit.params and fit.psi is not None:
         a, b, _ = fit.params
         lam = np.tan(data.measured_phi + fit.psi)

@@ -471,8 +471,10 @@ def refine_best(
     n_refined: int = N_REFINED,
     significance: float | None = None,
     tolerance: float | None = None,
+    solver: LeastSquaresConfig = SIGNATURE_SOLVER,
 ) -> ClassFit:
-    """Score every initial guess in one batch and refine the best ``n_refined`` together.
+    """Score every initial guess in one batch and refine the best ``n_refined`` together
+    (with ``solver``; many guesses are screened first, :func:`_screen_and_refine`).
 
     With ``significance`` (and ``tolerance`` in the tolerance mode), a class whose best
     guess scores above ``REFINE_GATE`` times the :func:`acceptance_statistic` and is
@@ -502,7 +504,7 @@ def refine_best(
         return replace(fit, message="inconsistent already at the initial guess; not refined")
     X, sigma = X[order], sigma[order]
     if order.size <= KEPT_AFTER_SCREENING:
-        X, R = problem.solve(X, sigma)
+        X, R = problem.solve(X, sigma, solver)
     else:
         X, R, order = _screen_and_refine(problem, X, sigma, order)
         sigma = np.array([guesses[i].sigma for i in order], dtype=float)
