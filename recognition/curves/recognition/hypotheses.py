@@ -34,9 +34,9 @@ from recognition.errors import DegenerateGeometry, InvalidCurveData, NoRealSolut
 from recognition.least_squares import LeastSquaresConfig
 
 __all__ = [
+    "PRECISE_SPLINE_SOLVER",
     "SMALL_KAPPA_FRACTION",
     "SPLINE_REFINED",
-    "PRECISE_SPLINE_SOLVER",
     "SPLINE_REFINED_PRECISE",
     "Test",
     "fit_conics",
