@@ -247,3 +247,37 @@ def noisy_samples(
     y = np.interp(wanted, s, d[0, 1])
     points = np.stack([x, y], axis=1) + rng.normal(scale=noise, size=(wanted.size, 2))
     return points[::-1] if rng.integers(2) else points
+
+
+#: The thesis's joystick experiment (Section 3.4.2, Table 3.4): arcs of 6 cm sampled
+#: every 0.05 cm with 0.003 cm noise on an ellipse of 25 x 17.5 mm.
+JOYSTICK_ARC = 6.0
+JOYSTICK_SPACING = 0.05
+JOYSTICK_NOISE = 0.003
+#: The piece of the curve a joystick arc is drawn from, scaled to this arc length.
+JOYSTICK_PIECE = 8.0
+
+
+def joystick_samples(curve: TestCurve, rng: np.random.Generator) -> np.ndarray:
+    """The thesis's joystick data on ``curve``: its longest stretch without a cusp (speed
+    above a tenth of the median) scaled to ``JOYSTICK_PIECE`` cm of arc length, then an
+    arc of ``JOYSTICK_ARC`` cm of it, a point every ``JOYSTICK_SPACING`` cm with Gaussian
+    noise ``JOYSTICK_NOISE`` cm per coordinate, in a random direction of traversal."""
+    lo, hi = curve.t_range
+    t = np.linspace(lo, hi, 20001)
+    d = curve.derivatives(t)
+    speed = np.hypot(d[1, 0], d[1, 1])
+    fast = np.concatenate([[False], speed > 0.1 * np.median(speed), [False]])
+    edges = np.flatnonzero(np.diff(fast.astype(int)))
+    starts, stops = edges[::2], edges[1::2]
+    longest = int(np.argmax(stops - starts))
+    keep = slice(starts[longest], stops[longest])
+    t, speed, xy = t[keep], speed[keep], d[0, :, keep].T
+    s = np.concatenate([[0.0], np.cumsum(0.5 * (speed[1:] + speed[:-1]) * np.diff(t))])
+    scale = JOYSTICK_PIECE / s[-1]
+    s, xy = s * scale, xy * scale
+    start = rng.uniform(0.0, JOYSTICK_PIECE - JOYSTICK_ARC)
+    wanted = np.arange(start, start + JOYSTICK_ARC + 1e-9, JOYSTICK_SPACING)
+    points = np.stack([np.interp(wanted, s, xy[:, 0]), np.interp(wanted, s, xy[:, 1])], 1)
+    points = points + rng.normal(scale=JOYSTICK_NOISE, size=points.shape)
+    return points[::-1] if rng.integers(2) else points
