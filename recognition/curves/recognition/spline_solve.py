@@ -235,8 +235,9 @@ def _place_contacts(
 def spline_candidates(
     kappa: np.ndarray, kappa_s: np.ndarray, phi: np.ndarray, pair: tuple[int, int]
 ) -> SplineCandidates:
-    """Every spline through the contacts ``pair`` (module docstring), with every contact
-    placed on it, best agreement of the others first.
+    """Every spline (3.35) through the contacts ``pair``, a polynomial cubic (3.25) whose
+    kappa and kappa_s (thesis Eqs. (3.1)-(3.2)) and tangent turn match theirs (module
+    docstring), with every contact placed on it, best agreement of the others first.
 
     Parameters
     ----------
