@@ -254,30 +254,44 @@ def noisy_samples(
 JOYSTICK_ARC = 6.0
 JOYSTICK_SPACING = 0.05
 JOYSTICK_NOISE = 0.003
-#: The piece of the curve a joystick arc is drawn from, scaled to this arc length.
-JOYSTICK_PIECE = 8.0
+#: The arc turns its tangent by this much in all (radians): the thesis's 6 cm arcs of
+#: its 25 x 17.5 mm ellipse turn by 2.2 to 3.4.
+JOYSTICK_TURN = 2.5
+
+
+def _longest_run(mask: np.ndarray) -> slice:
+    """The longest stretch of True in ``mask`` (empty if none)."""
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], mask.astype(int), [0]])))
+    starts, stops = edges[::2], edges[1::2]
+    if starts.size == 0:
+        return slice(0, 0)
+    i = int(np.argmax(stops - starts))
+    return slice(int(starts[i]), int(stops[i]))
 
 
 def joystick_samples(curve: TestCurve, rng: np.random.Generator) -> np.ndarray:
-    """The thesis's joystick data on ``curve``: its longest stretch without a cusp (speed
-    above a tenth of the median) scaled to ``JOYSTICK_PIECE`` cm of arc length, then an
-    arc of ``JOYSTICK_ARC`` cm of it, a point every ``JOYSTICK_SPACING`` cm with Gaussian
-    noise ``JOYSTICK_NOISE`` cm per coordinate, in a random direction of traversal."""
+    """The thesis's joystick data on ``curve``: on its longest stretch away from cusps
+    (speed above a tenth of the median) a random arc whose tangent turns by
+    ``JOYSTICK_TURN`` in all (or the whole stretch, if it turns less), scaled to
+    ``JOYSTICK_ARC`` cm, a point every ``JOYSTICK_SPACING`` cm with Gaussian noise
+    ``JOYSTICK_NOISE`` cm per coordinate, in a random direction of traversal."""
     lo, hi = curve.t_range
     t = np.linspace(lo, hi, 20001)
     d = curve.derivatives(t)
     speed = np.hypot(d[1, 0], d[1, 1])
-    fast = np.concatenate([[False], speed > 0.1 * np.median(speed), [False]])
-    edges = np.flatnonzero(np.diff(fast.astype(int)))
-    starts, stops = edges[::2], edges[1::2]
-    longest = int(np.argmax(stops - starts))
-    keep = slice(starts[longest], stops[longest])
-    t, speed, xy = t[keep], speed[keep], d[0, :, keep].T
-    s = np.concatenate([[0.0], np.cumsum(0.5 * (speed[1:] + speed[:-1]) * np.diff(t))])
-    scale = JOYSTICK_PIECE / s[-1]
-    s, xy = s * scale, xy * scale
-    start = rng.uniform(0.0, JOYSTICK_PIECE - JOYSTICK_ARC)
-    wanted = np.arange(start, start + JOYSTICK_ARC + 1e-9, JOYSTICK_SPACING)
-    points = np.stack([np.interp(wanted, s, xy[:, 0]), np.interp(wanted, s, xy[:, 1])], 1)
+    run = _longest_run(speed > 0.1 * np.median(speed))
+    speed, d = speed[run], d[:, :, run]
+    ds = 0.5 * (speed[1:] + speed[:-1]) * np.diff(t[run])
+    s = np.concatenate([[0.0], np.cumsum(ds)])
+    kappa = np.abs(curvature_terms(d)[0])
+    turn = np.concatenate([[0.0], np.cumsum(0.5 * (kappa[1:] + kappa[:-1]) * ds)])
+    if turn[-1] <= JOYSTICK_TURN:
+        s0, s1 = 0.0, s[-1]
+    else:
+        turn0 = rng.uniform(0.0, turn[-1] - JOYSTICK_TURN)
+        s0, s1 = np.interp([turn0, turn0 + JOYSTICK_TURN], turn, s)
+    scale = JOYSTICK_ARC / (s1 - s0)
+    wanted = np.arange(0.0, JOYSTICK_ARC + 1e-9, JOYSTICK_SPACING) / scale + s0
+    points = scale * np.stack([np.interp(wanted, s, d[0, 0]), np.interp(wanted, s, d[0, 1])], 1)
     points = points + rng.normal(scale=JOYSTICK_NOISE, size=points.shape)
     return points[::-1] if rng.integers(2) else points
