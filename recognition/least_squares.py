@@ -14,7 +14,8 @@ with D the identity scaled by trace(J^T J) / n (:attr:`Damping.TRACE`) or Marqua
 diagonal of J^T J (:attr:`Damping.DIAGONAL`), and keeps the step when it lowers the
 cost; lambda shrinks after a kept step and grows after a rejected one. A problem stops
 when a kept step lowers its cost by less than ``rtol`` of it, when a kept step is
-smaller than ``step_tol`` (as the caller measures steps), when its cost is zero, when
+smaller than ``step_tol`` (as the caller measures steps), when its cost is at most
+``atol`` (zero by default), when
 lambda exceeds ``max_damping`` (no damping lowers the cost) or after
 ``max_iterations``.
 """
@@ -68,7 +69,7 @@ class LeastSquaresStatus(StrEnum):
 
     CONVERGED = "converged"
     """A kept step lowered the cost by less than ``rtol``, or moved less than
-    ``step_tol``, or the cost is zero."""
+    ``step_tol``, or the cost is at most ``atol``."""
     STALLED = "stalled"
     """lambda exceeded ``max_damping``: no step near the state lowers the cost."""
     MAX_ITERATIONS = "max_iterations"
@@ -99,6 +100,11 @@ class LeastSquaresConfig:
         problem (0: never).
     step_tol : float
         A kept step whose size (``step_size``) is below this ends the problem (0: never).
+    atol : float
+        A problem whose cost is at or below this has converged (0: only a zero cost).
+    any_at_atol : bool
+        The batch holds alternative starts of one problem: all stop as soon as one
+        reaches ``atol``.
     retry : bool
         A rejected step is tried again with a larger lambda within the same iteration,
         until one is kept or lambda exceeds ``max_damping``.
@@ -121,6 +127,8 @@ class LeastSquaresConfig:
     trace_floor: float = 1e-12
     rtol: float = 1e-4
     step_tol: float = 0.0
+    atol: float = 0.0
+    any_at_atol: bool = False
     retry: bool = False
     extend: bool = False
     solve: LinearSolve = LinearSolve.LU
@@ -248,8 +256,8 @@ def damped_least_squares(
     status = [LeastSquaresStatus.MAX_ITERATIONS] * B
     measured = current if monitor is None else np.array(monitor(state), dtype=float)
     trace = [measured.copy()]
-    active = np.flatnonzero(current > 0)
-    for b in np.flatnonzero(~(current > 0)):
+    active = np.flatnonzero(current > config.atol)
+    for b in np.flatnonzero(~(current > config.atol)):
         status[b] = LeastSquaresStatus.CONVERGED
     size = step_size or (lambda _s, step: np.linalg.norm(step, axis=1))
     for _ in range(config.max_iterations):
@@ -303,7 +311,7 @@ def damped_least_squares(
         converged = (
             (decrease < config.rtol * current[rows])
             | (size(_take(here, good), steps[good]) < config.step_tol)
-            | (new_cost[good] == 0)
+            | (new_cost[good] <= config.atol)
         )
         current[rows] = new_cost[good]
         lam[rows] = np.maximum(lam[rows] * config.shrink, config.min_damping)
@@ -321,4 +329,6 @@ def damped_least_squares(
             measured[active] = monitor(_take(state, active))
         trace.append(measured.copy())
         active = active[~stop]
+        if config.any_at_atol and np.any(current <= config.atol):
+            active = active[:0]
     return LeastSquaresResult(state, current, iterations, tuple(status), np.array(trace))

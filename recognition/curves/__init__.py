@@ -2,6 +2,7 @@
 
 from recognition.curves import invariants, reduction
 from recognition.curves.estimation import (
+    EstimateSensitivity,
     LocalGeometry,
     finite_difference_geometry,
     local_fit_geometry,
@@ -10,6 +11,7 @@ from recognition.curves.families import CanonicalCurve, CurveKind
 from recognition.curves.recognition import (
     ClassFit,
     CurveRecognition,
+    InputUncertainty,
     recognize_curve,
     recognize_points,
 )
@@ -24,6 +26,8 @@ __all__ = [
     "ClassFit",
     "CurveKind",
     "CurveRecognition",
+    "EstimateSensitivity",
+    "InputUncertainty",
     "LocalGeometry",
     "SampledCurve",
     "finite_difference_geometry",

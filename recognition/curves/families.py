@@ -26,6 +26,7 @@ __all__ = [
     "canonical_derivatives",
     "curvature",
     "curvature_derivative",
+    "derivative_terms",
     "tangent_angle",
 ]
 
@@ -71,36 +72,51 @@ N_PARAMETERS: dict[CurveKind, int] = {
 }
 
 
-def _polynomial_coefficients(
-    kind: CurveKind, params: Sequence[ArrayLike]
-) -> tuple[np.ndarray, np.ndarray]:
-    """Coefficients (lowest degree first, last axis) of x(t) and y(t), polynomial classes.
+def derivative_terms(
+    kind: CurveKind | str, params: Sequence[ArrayLike], t: ArrayLike
+) -> list[tuple[np.ndarray | float, np.ndarray | float]]:
+    """(x, y) and their first three derivatives of a canonical curve, not broadcast.
 
-    Each parameter may be a scalar or an array of a common shape S; the result has
-    shape S + (degree + 1,).
+    Each parameter may be a scalar or an array of shape S, ``t`` of shape S + (n,);
+    entry k of the list is the pair (x^(k), y^(k)), each an array or a constant that
+    broadcasts with ``t``. :func:`canonical_derivatives` stacks them.
     """
-    p = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in params))
-    zero, one = np.zeros_like(p[0]), np.ones_like(p[0])
-    x: tuple[np.ndarray, ...]
-    y: tuple[np.ndarray, ...]
-    if kind is CurveKind.PARABOLA:  # x = a t^2, y = 2 a t (Section 3.2.1.1)
+    kind = CurveKind(kind)
+    t = np.asarray(t, dtype=float)
+    p = [np.asarray(v, dtype=float)[..., None] for v in params]
+    x: list[np.ndarray | float]
+    y: list[np.ndarray | float]
+    if kind in (CurveKind.ELLIPSE, CurveKind.HYPERBOLA):
+        a, b = p
+        if kind is CurveKind.ELLIPSE:  # (a cos t, b sin t)
+            c, s = np.cos(t), np.sin(t)
+            x, y = [a * c, -a * s, -a * c, a * s], [b * s, b * c, -b * s, -b * c]
+        else:  # (a cosh t, b sinh t)
+            c, s = np.cosh(t), np.sinh(t)
+            x, y = [a * c, a * s, a * c, a * s], [b * s, b * c, b * s, b * c]
+    elif kind is CurveKind.PARABOLA:  # x = a t^2, y = 2 a t (Section 3.2.1.1)
         (a,) = p
-        x, y = (zero, zero, a), (zero, 2.0 * a)
+        x, y = [a * t * t, 2.0 * a * t, 2.0 * a, 0.0], [2.0 * a * t, 2.0 * a, 0.0, 0.0]
     elif kind is CurveKind.CUBICAL_PARABOLA:  # x = t, y = a t^3 + b t (Section 3.2.2.1)
         a, b = p
-        x, y = (zero, one), (zero, b, zero, a)
-    elif kind is CurveKind.SEMICUBICAL_PARABOLA:  # x = t^2, y = a t^3 + b t^2 (3.2.2.2)
-        a, b = p
-        x, y = (zero, zero, one), (zero, zero, b, a)
-    elif kind is CurveKind.CUBIC_SPLINE:  # x = t^2, y = a t^3 + b t^2 + c t, Eq. (3.35)
-        a, b, c = p
-        x, y = (zero, zero, one), (zero, c, b, a)
+        x = [t, 1.0, 0.0, 0.0]
+        y = [(a * t * t + b) * t, 3.0 * a * t * t + b, 6.0 * a * t, 6.0 * a]
+    elif kind in (CurveKind.SEMICUBICAL_PARABOLA, CurveKind.CUBIC_SPLINE):
+        # x = t^2, y = a t^3 + b t^2 + c t: Eq. (3.35); c = 0 for Section 3.2.2.2
+        a, b = p[0], p[1]
+        c = p[2] if kind is CurveKind.CUBIC_SPLINE else 0.0
+        x = [t * t, 2.0 * t, 2.0, 0.0]
+        y = [((a * t + b) * t + c) * t, (3.0 * a * t + 2.0 * b) * t + c, 6.0 * a * t + 2.0 * b]
+        y.append(6.0 * a)
     elif kind is CurveKind.QUARTIC:  # x = t, y = a t^4 + b t^2 + c t: in no class
         a, b, c = p
-        x, y = (zero, one), (zero, c, b, zero, a)
+        t2 = t * t
+        x = [t, 1.0, 0.0, 0.0]
+        y = [(a * t2 * t + b * t + c) * t, 4.0 * a * t2 * t + 2.0 * b * t + c]
+        y += [12.0 * a * t2 + 2.0 * b, 24.0 * a * t]
     else:
-        raise ValueError(f"{kind} is not a polynomial class")
-    return np.stack(x, axis=-1), np.stack(y, axis=-1)
+        raise InvalidCurveData(f"{kind} has no canonical form")
+    return list(zip(x, y, strict=True))
 
 
 def canonical_derivatives(
@@ -122,28 +138,9 @@ def canonical_derivatives(
     (4, 2, ..., n) float
         ``[k, :, ..., i]`` is the k-th derivative of (x, y) at ``t[..., i]``.
     """
-    kind = CurveKind(kind)
-    t = np.asarray(t, dtype=float)
-    if kind in (CurveKind.ELLIPSE, CurveKind.HYPERBOLA):
-        a, b = (np.asarray(v, dtype=float)[..., None] for v in params)
-        if kind is CurveKind.ELLIPSE:  # (a cos t, b sin t)
-            c, s = np.cos(t), np.sin(t)
-            xs, ys = (c, -s, -c, s), (s, c, -s, -c)
-        else:  # (a cosh t, b sinh t)
-            c, s = np.cosh(t), np.sinh(t)
-            xs, ys = (c, s, c, s), (s, c, s, c)
-        return np.stack(
-            [np.stack(np.broadcast_arrays(a * x, b * y)) for x, y in zip(xs, ys, strict=True)]
-        )
-    cx, cy = _polynomial_coefficients(kind, params)
-    degree = max(cx.shape[-1], cy.shape[-1]) - 1
-    C = np.zeros((4, 2, *cx.shape[:-1], degree + 1))
-    C[0, 0, ..., : cx.shape[-1]], C[0, 1, ..., : cy.shape[-1]] = cx, cy
-    powers = np.arange(1, degree + 1)
-    for k in range(1, 4):  # coefficient j of the derivative is (j + 1) c_(j + 1)
-        C[k, :, ..., :-1] = C[k - 1, :, ..., 1:] * powers
-    T = t[..., None] ** np.arange(degree + 1)  # (..., n, degree + 1)
-    return np.einsum("kx...d,...nd->kx...n", C, T)
+    terms = derivative_terms(kind, params, t)
+    shape = np.broadcast_shapes(*(np.shape(v) for pair in terms for v in pair))
+    return np.stack([np.stack([np.broadcast_to(v, shape) for v in pair]) for pair in terms])
 
 
 def curvature(d: np.ndarray) -> np.ndarray:

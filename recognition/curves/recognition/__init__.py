@@ -32,22 +32,37 @@ Every class hypothesis is initialised from the thesis's invariants and then refi
 :class:`CurveRecognition` (the decision), in :mod:`.results`.
 """
 
-from recognition.curves.recognition.results import ClassFit, CurveRecognition
-from recognition.curves.recognition.signature_fit import canonical_parameters
+from recognition.curves.recognition.results import (
+    ClassFit,
+    CurveRecognition,
+    canonical_parameters,
+)
 from recognition.curves.recognition.tree import (
     COMPLEXITY_FACTOR,
     DEFAULT_TOLERANCE,
+    estimated_uncertainty,
     fit_class,
     recognize_curve,
     recognize_points,
 )
+from recognition.curves.recognition.uncertainty import (
+    DEFAULT_SIGNIFICANCE,
+    EXACT_PRECISION,
+    InputUncertainty,
+    consistency_test,
+)
 
 __all__ = [
     "COMPLEXITY_FACTOR",
+    "DEFAULT_SIGNIFICANCE",
     "DEFAULT_TOLERANCE",
+    "EXACT_PRECISION",
     "ClassFit",
     "CurveRecognition",
+    "InputUncertainty",
     "canonical_parameters",
+    "consistency_test",
+    "estimated_uncertainty",
     "fit_class",
     "recognize_curve",
     "recognize_points",

@@ -2,13 +2,20 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from recognition.curves.families import CurveKind
 
-__all__ = ["PARAMETER_NAMES", "ClassFit", "CurveRecognition"]
+__all__ = [
+    "PARAMETER_NAMES",
+    "ClassFit",
+    "CurveRecognition",
+    "canonical_form",
+    "canonical_parameters",
+]
 
 #: Names of the shape parameters of a canonical form, by their number.
 PARAMETER_NAMES = {1: ("a",), 2: ("a", "b"), 3: ("a", "b", "c")}
@@ -24,7 +31,8 @@ class ClassFit:
     params : tuple of float
         Canonical shape parameters (empty when the class was rejected outright).
     residual : float
-        Reduced relative residual of the refined fit; ``inf`` when rejected.
+        Reduced RMS of the standardised residuals of the refined fit (divided by the
+        degrees of freedom left); ``inf`` when rejected.
     t : (m,) float
         Contact parameter of each estimate in the canonical form.
     psi : float or None
@@ -39,6 +47,16 @@ class ClassFit:
         Each point's residual norm in the final fit (of the points used).
     outliers : tuple of int
         Points left out as estimation outliers (their t is NaN).
+    statistic : float
+        Sum of the squared standardised residuals (chi-square statistic); ``inf`` when
+        rejected.
+    scale, dof : float
+        For data of this class with errors as stated, ``statistic`` is distributed as
+        ``scale * chi2(dof)`` (``scale`` 1 and ``dof`` residuals minus unknowns for
+        independent errors).
+    p_value : float
+        Probability of a statistic at least this large for data of this class; 0 when
+        rejected, NaN when no degree of freedom is left.
     """
 
     kind: CurveKind
@@ -51,6 +69,10 @@ class ClassFit:
     message: str = ""
     per_point: np.ndarray | None = None
     outliers: tuple[int, ...] = ()
+    statistic: float = float("inf")
+    scale: float = 1.0
+    dof: float = float("nan")
+    p_value: float = 0.0
 
     @property
     def parameters(self) -> dict[str, float]:
@@ -78,7 +100,19 @@ class CurveRecognition:
         Consistency residual of the recognised class (``inf`` if unclassified).
     candidates : tuple of ClassFit
         Every hypothesis tested, in tree order.
-    tolerance : float
+    tolerance : float or None
+        The reduced-residual tolerance of the decision, when one was given instead of
+        the input uncertainty.
+    statistic : float
+        Chi-square statistic of the recognised class (``inf`` if unclassified).
+    p_value : float
+        Its p-value (:attr:`ClassFit.p_value`); 0 if unclassified.
+    significance : float
+        Significance of the consistency test: a class is consistent when its p-value is
+        at least this.
+    runner_up : ClassFit or None
+        The next-best class: the best-fitting of the others (the best of all when
+        unclassified).
     """
 
     kind: CurveKind
@@ -88,9 +122,44 @@ class CurveRecognition:
     spread: dict[str, float]
     residual: float
     candidates: tuple[ClassFit, ...]
-    tolerance: float
+    tolerance: float | None
+    statistic: float = float("inf")
+    p_value: float = 0.0
+    significance: float = float("nan")
+    runner_up: ClassFit | None = None
 
     @property
     def fit(self) -> ClassFit | None:
         """The winning hypothesis, or None if unclassified."""
         return next((c for c in self.candidates if c.kind is self.kind), None)
+
+
+def canonical_form(
+    kind: CurveKind, params: tuple[float, ...], t: np.ndarray, sigma: float, psi: float = 0.0
+) -> tuple[tuple[float, ...], np.ndarray, float, float]:
+    """Report equivalent shapes one way: (a, b) positive for conics with a >= b for the
+    ellipse, a > 0 for the x = t^2 classes; returns shape, contacts, orientation and psi.
+
+    ``x = t^2, y = a t^3 + b t^2 + c t`` with ``t -> -t`` is the same curve with
+    (-a, b, -c), traversed the other way; for the semi-cubical parabola (-a, b). The
+    ellipse (a cos t, b sin t) with a < b is (b cos t', a sin t') in a frame turned by
+    -pi/2, with t' = t - pi/2 (and psi less pi/2).
+    """
+    p = list(params)
+    if kind in (CurveKind.PARABOLA, CurveKind.ELLIPSE, CurveKind.HYPERBOLA):
+        p = [abs(v) for v in p]
+        if kind is CurveKind.ELLIPSE and p[1] > p[0]:
+            p = [p[1], p[0]]
+            t, psi = t - np.pi / 2, psi - np.pi / 2
+    elif kind in (CurveKind.SEMICUBICAL_PARABOLA, CurveKind.CUBIC_SPLINE) and p[0] < 0:
+        p[0] = -p[0]
+        if kind is CurveKind.CUBIC_SPLINE:
+            p[2] = -p[2]
+        t, sigma = -t, -sigma
+    return tuple(p), t, sigma, psi
+
+
+def canonical_parameters(kind: CurveKind | str, params: Sequence[float]) -> tuple[float, ...]:
+    """The representative of a shape's equivalent parameter sets that the tree reports."""
+    kind = CurveKind(kind)
+    return canonical_form(kind, tuple(float(v) for v in params), np.zeros(0), 1.0)[0]

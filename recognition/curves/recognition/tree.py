@@ -2,36 +2,55 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable
+import numbers
+from collections.abc import Callable, Sequence
 from dataclasses import replace
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
+from scipy.stats import chi2
 
 from recognition.curves.estimation import LocalGeometry, local_fit_geometry
 from recognition.curves.families import N_PARAMETERS, TREE_CLASSES, CurveKind
-from recognition.curves.recognition.hypotheses import fit_hypothesis
+from recognition.curves.recognition.hypotheses import Test, fit_conics, fit_hypothesis
 from recognition.curves.recognition.results import ClassFit, CurveRecognition
-from recognition.curves.recognition.signature_fit import ContactData, best_fit, contact_data
+from recognition.curves.recognition.signature_fit import (
+    ContactData,
+    best_fit,
+    contact_data,
+    rejected,
+)
+from recognition.curves.recognition.uncertainty import (
+    DEFAULT_SIGNIFICANCE,
+    EXACT_PRECISION,
+    InputUncertainty,
+    magnitude_scales,
+)
 from recognition.errors import DegenerateGeometry, InvalidCurveData
 
 __all__ = [
     "COMPLEXITY_FACTOR",
+    "DEFAULT_SIGNIFICANCE",
     "DEFAULT_TOLERANCE",
+    "ESTIMATE_PRECISION",
     "MAX_OUTLIER_FRACTION",
     "MIN_POINTS_FOR_OUTLIERS",
     "OUTLIER_FACTOR",
+    "estimated_uncertainty",
     "fit_class",
     "recognize_curve",
     "recognize_points",
 ]
 
-#: Default consistency tolerance (reduced relative residual) of :func:`recognize_curve`.
+#: The reduced relative residual of a consistent class in the ``tolerance`` mode as it
+#: was the default before the input uncertainty: suits noisy tactile estimates only.
 DEFAULT_TOLERANCE = 0.02
-#: A more complex class must fit this many times better to be preferred.
+#: Tolerance mode: a more complex class must fit this many times better to be preferred.
 COMPLEXITY_FACTOR = 3.0
-
+#: Relative floor added to the uncertainty :func:`recognize_points` propagates from its
+#: estimator (the rounding of the estimates themselves), and radians for the angles.
+ESTIMATE_PRECISION = 1e-12
 
 #: A point whose residual exceeds this multiple of the median is an estimation outlier.
 OUTLIER_FACTOR = 5.0
@@ -42,7 +61,12 @@ MIN_POINTS_FOR_OUTLIERS = 6
 
 
 def fit_class(
-    kind: CurveKind | str, kappa: ArrayLike, kappa_s: ArrayLike, dphi: ArrayLike | None = None
+    kind: CurveKind | str,
+    kappa: ArrayLike,
+    kappa_s: ArrayLike,
+    dphi: ArrayLike | None = None,
+    *,
+    uncertainty: InputUncertainty | None = None,
 ) -> ClassFit:
     """Test one class hypothesis on kappa, kappa_s (and tangent rotations ``dphi``).
 
@@ -54,13 +78,16 @@ def fit_class(
         Curvature (1/length) and its arc-length derivative (1/length^2) at m >= 3 points.
     dphi : (m,) float, optional
         Tangent rotation of each point from the first (radians); the cubic classes need it.
+    uncertainty : InputUncertainty, optional
+        Standard uncertainty of the inputs; without it the residuals are relative (the
+        tolerance mode's measure) and the statistic is the sum of their squares.
     """
     kind = CurveKind(kind)
-    data = contact_data(kappa, kappa_s, dphi)
-    return _fit_with_outliers(kind, data)
+    data = contact_data(kappa, kappa_s, dphi, uncertainty)
+    return _fit_with_outliers(kind, data, Test())
 
 
-def _fit_with_outliers(kind: CurveKind, data: ContactData) -> ClassFit:
+def _fit_with_outliers(kind: CurveKind, data: ContactData, test: Test) -> ClassFit:
     """Fit one class; then leave out estimation outliers and fit again from scratch.
 
     Estimates of kappa_s are least reliable where the curvature changes fastest (a few
@@ -70,7 +97,10 @@ def _fit_with_outliers(kind: CurveKind, data: ContactData) -> ClassFit:
     and the class is fitted again, initialisation included, on the rest. Their contact
     parameters are NaN and their indices are in ``ClassFit.outliers``.
     """
-    fit = fit_hypothesis(kind, data)
+    return _with_outliers(fit_hypothesis(kind, data, test), data, test)
+
+
+def _with_outliers(fit: ClassFit, data: ContactData, test: Test) -> ClassFit:
     if not np.isfinite(fit.residual) or fit.per_point is None:
         return fit
     per_point = fit.per_point
@@ -80,12 +110,64 @@ def _fit_with_outliers(kind: CurveKind, data: ContactData) -> ClassFit:
     if outliers.size == 0:
         return fit
     keep = np.setdiff1d(np.arange(data.m), outliers)
-    again = fit_hypothesis(kind, data.subset(keep))
+    again = fit_hypothesis(fit.kind, data.subset(keep), test)
     if not again.residual < fit.residual:
         return fit
     t = np.full(data.m, np.nan)
     t[keep] = again.t
     return replace(again, t=t, outliers=tuple(int(i) for i in outliers))
+
+
+def _decided(fits: Sequence[ClassFit], test: Test, complexity_factor: float) -> ClassFit | None:
+    """The class the fits so far decide for, if no class with one more parameter could
+    displace it: in the tolerance mode a residual below ``tolerance / complexity_factor``;
+    else a consistent class whose statistic is below the likelihood-ratio margin of one
+    more parameter (:func:`_choose_by_test`), which no fit could overcome."""
+    if test.tolerance is not None:
+        good = [f for f in fits if f.residual <= test.tolerance / complexity_factor]
+        return min(good, key=lambda f: f.residual) if good else None
+    if test.significance is None:
+        return None
+    chosen = _choose_by_test(fits, test.significance)
+    if chosen is not None and chosen.statistic <= chosen.scale * chi2.isf(test.significance, 1):
+        return chosen
+    return None
+
+
+def _not_fitted(kind: CurveKind, decided: ClassFit) -> ClassFit:
+    """The record of a class left unfitted because ``decided`` fits too well."""
+    message = (
+        f"not fitted: the {decided.kind} fits too well for a {kind} to fit significantly better"
+    )
+    return replace(rejected(kind, message), statistic=float("nan"), p_value=float("nan"))
+
+
+def _all_fits(data: ContactData, test: Test, complexity_factor: float) -> list[ClassFit]:
+    """Every class of the tree fitted, outliers left out, in tree order.
+
+    The classes are fitted by number of parameters (the parabola and the conics first;
+    then the cubical and semi-cubical parabolas; then the cubic spline). A level is left
+    unfitted when the classes before it already decide (:func:`_decided`): no fit of more
+    parameters could change the decision.
+    """
+    fits: dict[CurveKind, ClassFit] = {}
+    with np.errstate(all="ignore"):
+        conics = fit_conics(data, test)
+    for fit in conics:
+        fits[fit.kind] = _with_outliers(fit, data, test)
+    fits[CurveKind.PARABOLA] = _fit_with_outliers(CurveKind.PARABOLA, data, test)
+    later = (
+        (CurveKind.CUBICAL_PARABOLA, CurveKind.SEMICUBICAL_PARABOLA),
+        (CurveKind.CUBIC_SPLINE,),
+    )
+    for kinds in later:
+        decided = _decided(list(fits.values()), test, complexity_factor)
+        for kind in kinds:
+            if decided is None:
+                fits[kind] = _fit_with_outliers(kind, data, test)
+            else:
+                fits[kind] = _not_fitted(kind, decided)
+    return [fits[kind] for kind in TREE_CLASSES]
 
 
 def _relative_spread(values: ArrayLike) -> float:
@@ -97,48 +179,127 @@ def _relative_spread(values: ArrayLike) -> float:
     return float(np.std(v) / max(abs(np.mean(v)), 1e-300))
 
 
+def _standing(fit: ClassFit) -> tuple[float, float]:
+    """Sort key of how well a class fits: p-value, then reduced statistic (lower first)."""
+    p = fit.p_value if np.isfinite(fit.p_value) else 0.0
+    reduced = fit.statistic / fit.dof if fit.dof > 0 else float("inf")
+    return (-p, reduced if np.isfinite(reduced) else float("inf"))
+
+
+def _choose_by_test(fits: Sequence[ClassFit], significance: float) -> ClassFit | None:
+    """The class the chi-square tests support, or None.
+
+    The consistent classes are those with p-value >= ``significance``. The simplest
+    level with a consistent class gives the first choice (the best-fitting there); a
+    consistent class of a higher level replaces it when its statistic is lower by more
+    than the ``1 - significance`` quantile of chi-square with the difference in
+    parameters as degrees of freedom (a likelihood-ratio test: the classes are nested,
+    a parabola is a conic and a spline, a semi-cubical parabola a spline with c = 0).
+    """
+    consistent = [f for f in fits if np.isfinite(f.p_value) and f.p_value >= significance]
+    if not consistent:
+        return None
+    levels = sorted({N_PARAMETERS[f.kind] for f in consistent})
+    chosen = min((f for f in consistent if N_PARAMETERS[f.kind] == levels[0]), key=_standing)
+    for level in levels[1:]:
+        candidate = min((f for f in consistent if N_PARAMETERS[f.kind] == level), key=_standing)
+        extra = N_PARAMETERS[candidate.kind] - N_PARAMETERS[chosen.kind]
+        margin = max(chosen.scale, candidate.scale) * chi2.isf(significance, extra)
+        if chosen.statistic - candidate.statistic > margin:
+            chosen = candidate
+    return chosen
+
+
+def _choose_by_tolerance(
+    fits: Sequence[ClassFit], tolerance: float, complexity_factor: float
+) -> ClassFit | None:
+    """The class of the tolerance mode: the simplest (parabola; then the two-parameter
+    classes; then the cubic spline) whose reduced residual is within
+    ``complexity_factor`` of the best, or below ``tolerance / complexity_factor``."""
+    best = best_fit(fits)
+    if not best.residual <= tolerance:
+        return None
+    good_enough = max(complexity_factor * best.residual, tolerance / complexity_factor)
+    for level in (1, 2, 3):
+        at_level = [f for f in fits if N_PARAMETERS[f.kind] == level]
+        if at_level and best_fit(at_level).residual <= good_enough:
+            return best_fit(at_level)
+    return None
+
+
 def recognize_curve(
     kappa: ArrayLike,
     kappa_s: ArrayLike,
     dphi: ArrayLike | None = None,
     *,
-    tolerance: float = DEFAULT_TOLERANCE,
+    uncertainty: InputUncertainty | None = None,
+    significance: float = DEFAULT_SIGNIFICANCE,
+    tolerance: float | None = None,
     complexity_factor: float = COMPLEXITY_FACTOR,
 ) -> CurveRecognition:
     """Recognise a curve from its local geometry at m >= 3 points (thesis Fig. 3.4).
 
+    Every class of the tree is fitted to the data (:mod:`.hypotheses`,
+    :mod:`.signature_fit`); a class is consistent when the chi-square statistic of its
+    fit, the residuals divided by the inputs' standard uncertainty, has a p-value of at
+    least ``significance`` (:mod:`.uncertainty`). The simplest consistent class is
+    recognised unless a more complex consistent one fits significantly better;
+    :attr:`CurveRecognition.runner_up` is the next-best class and
+    :attr:`CurveRecognition.p_value` how well the recognised one fits.
+
     Parameters
     ----------
     kappa, kappa_s : (m,) float
-        Curvature and its arc-length derivative at m points, in order of traversal.
+        Curvature (1/length) and its arc-length derivative (1/length^2) at m points, in
+        order of traversal.
     dphi : (m,) float, optional
         Tangent rotation of each point from the first (radians), e.g. the jaw rotation
         of Section 3.2.2.1 or :attr:`LocalGeometry.dphi`. Without it only the conics can
         be recognised.
-    tolerance : float
-        Largest reduced relative residual of a consistent class; must exceed the
-        relative estimation error of kappa and kappa_s.
+    uncertainty : InputUncertainty, optional
+        Standard uncertainty of the inputs (absolute or relative, for kappa, kappa_s and
+        the tangent angles, optionally correlated). Default: the values are exact to
+        rounding, ``InputUncertainty.relative(EXACT_PRECISION)``.
+    significance : float
+        Probability that data of a class, with errors as stated, are found inconsistent
+        with it (the test's false-rejection rate); the rate at which curves of no class
+        are accepted depends on how far they are from every class and is measured in
+        ``docs/results/chapter3.md``.
+    tolerance : float, optional
+        Instead of the uncertainty: the largest reduced relative residual of a
+        consistent class (the decision before the input uncertainty; 0.02 was its
+        default), with ``complexity_factor``.
     complexity_factor : float
-        How much better a more complex class must fit to be preferred.
+        Tolerance mode: how much better a more complex class must fit to be preferred.
     """
-    if not tolerance > 0:
-        raise InvalidCurveData(f"tolerance must be positive, got {tolerance}")
-    data = contact_data(kappa, kappa_s, dphi)
+    if tolerance is not None:
+        if uncertainty is not None:
+            raise InvalidCurveData("give either the input uncertainty or a tolerance, not both")
+        if not (isinstance(tolerance, numbers.Real) and tolerance > 0):
+            raise InvalidCurveData(f"tolerance must be positive, got {tolerance}")
+        if not (isinstance(complexity_factor, numbers.Real) and complexity_factor >= 1):
+            raise InvalidCurveData(f"complexity_factor must be >= 1, got {complexity_factor}")
+    if not (isinstance(significance, numbers.Real) and 0 < significance < 1):
+        raise InvalidCurveData(f"significance must lie in (0, 1), got {significance}")
+    if uncertainty is None and tolerance is None:
+        uncertainty = InputUncertainty.relative(EXACT_PRECISION)
+    if uncertainty is not None and not isinstance(uncertainty, InputUncertainty):
+        raise InvalidCurveData(
+            f"uncertainty must be an InputUncertainty, got {type(uncertainty).__name__}"
+        )
+    data = contact_data(kappa, kappa_s, dphi, uncertainty)
     if data.phi is not None and np.ptp(data.phi) < 1e-9:
         raise DegenerateGeometry(
             "the tangent does not turn: a straight segment has no curvature invariants"
         )
-    fits = [_fit_with_outliers(k, data) for k in TREE_CLASSES]
-
-    chosen: ClassFit | None = None
-    best = best_fit(fits)
-    if best.residual <= tolerance:
-        good_enough = max(complexity_factor * best.residual, tolerance / complexity_factor)
-        for level in (1, 2, 3):
-            at_level = [f for f in fits if N_PARAMETERS[f.kind] == level]
-            if at_level and best_fit(at_level).residual <= good_enough:
-                chosen = best_fit(at_level)
-                break
+    test = Test(significance, None) if tolerance is None else Test(None, tolerance)
+    fits = _all_fits(data, test, complexity_factor)
+    if tolerance is None:
+        chosen = _choose_by_test(fits, significance)
+    else:
+        chosen = _choose_by_tolerance(fits, tolerance, complexity_factor)
+    others = sorted((f for f in fits if f is not chosen), key=_standing)
+    runner_up = others[0] if others else None
     if chosen is None:
         return CurveRecognition(
             CurveKind.UNCLASSIFIED,
@@ -149,6 +310,10 @@ def recognize_curve(
             float("inf"),
             tuple(fits),
             tolerance,
+            float("inf"),
+            0.0,
+            significance,
+            runner_up,
         )
     invariants = dict(chosen.invariants)
     if chosen.kind is CurveKind.PARABOLA:
@@ -162,14 +327,36 @@ def recognize_curve(
         chosen.residual,
         tuple(fits),
         tolerance,
+        chosen.statistic,
+        chosen.p_value,
+        significance,
+        runner_up,
     )
+
+
+def estimated_uncertainty(geometry: LocalGeometry) -> InputUncertainty:
+    """The uncertainty of an estimator's kappa, kappa_s and tangent angles from its own
+    error model (:attr:`LocalGeometry.sensitivity`: the noise of the local fits'
+    residuals propagated, and their truncation error), with the floor
+    ``ESTIMATE_PRECISION``."""
+    if geometry.sensitivity is None:
+        raise InvalidCurveData(
+            "the estimator gives no error model of its estimates (LocalGeometry.sensitivity "
+            "is None); pass uncertainty= or tolerance= to recognize_points"
+        )
+    cov = geometry.sensitivity.covariance()
+    scale_k, scale_ks = magnitude_scales(geometry.kappa, geometry.kappa_s)
+    floor = ESTIMATE_PRECISION * np.concatenate([scale_k, scale_ks, np.ones(len(geometry))])
+    return InputUncertainty.from_covariance(cov + np.diag(floor**2))
 
 
 def recognize_points(
     points: ArrayLike,
     *,
     n_estimates: int = 25,
-    tolerance: float = DEFAULT_TOLERANCE,
+    uncertainty: InputUncertainty | None = None,
+    significance: float = DEFAULT_SIGNIFICANCE,
+    tolerance: float | None = None,
     estimator: Callable[..., LocalGeometry] = local_fit_geometry,
     **estimator_options: Any,
 ) -> tuple[CurveRecognition, LocalGeometry]:
@@ -177,14 +364,17 @@ def recognize_points(
     (thesis Fig. 3.4).
 
     ``n_estimates`` evenly spaced estimates (of all the estimator returns) are passed to
-    :func:`recognize_curve` together with their tangent rotations.
+    :func:`recognize_curve` together with their tangent rotations and, unless
+    ``uncertainty`` or ``tolerance`` is given, the uncertainty the estimator's own error
+    model gives them (:func:`estimated_uncertainty`).
 
     Parameters
     ----------
     points : (n, 2) float
         Ordered tactile points along the curve (any length unit).
     n_estimates : int
-    tolerance : float
+        Estimates used, at least 3.
+    uncertainty, significance, tolerance
         See :func:`recognize_curve`.
     estimator : callable
         ``estimator(points, **estimator_options) -> LocalGeometry``.
@@ -195,6 +385,10 @@ def recognize_points(
     LocalGeometry
         The estimates used.
     """
+    if isinstance(n_estimates, bool) or not isinstance(n_estimates, numbers.Integral):
+        raise InvalidCurveData(f"n_estimates must be an integer >= 3, got {n_estimates!r}")
+    if n_estimates < 3:
+        raise InvalidCurveData(f"n_estimates must be at least 3, got {n_estimates}")
     geometry = estimator(points, **estimator_options)
     if len(geometry) < 3:
         raise InvalidCurveData("the estimator returned fewer than three estimates")
@@ -205,4 +399,14 @@ def recognize_points(
         raise DegenerateGeometry(
             "the points lie on a straight segment (kappa = 0): no curvature invariants exist"
         )
-    return recognize_curve(used.kappa, used.kappa_s, used.dphi, tolerance=tolerance), used
+    if uncertainty is None and tolerance is None:
+        uncertainty = estimated_uncertainty(used)
+    result = recognize_curve(
+        used.kappa,
+        used.kappa_s,
+        used.dphi,
+        uncertainty=uncertainty,
+        significance=significance,
+        tolerance=tolerance,
+    )
+    return result, used

@@ -1,0 +1,18 @@
+"""scripts/benchmark_curves.py: rates and timings of the Chapter 3 tree, written as JSON
+and Markdown."""
+
+import json
+from pathlib import Path
+
+from testing_scripts import load_script
+
+
+def test_benchmark_writes_rates_and_timings(tmp_path: Path) -> None:
+    bench = load_script("benchmark_curves")
+    out = tmp_path / "curves"
+    report = bench.run(bench.CurveBenchmarkConfig(curves=2, out=out))
+    payload = json.loads(out.with_suffix(".json").read_text())
+    assert set(payload["classes"]) == set(report["classes"])
+    assert {"command", "date", "machine"} <= set(payload)
+    assert all(0.0 <= row["correct_rate"] <= 1.0 for row in payload["classes"].values())
+    assert "| all |" in out.with_suffix(".md").read_text()
