@@ -111,6 +111,7 @@ def test_the_web_viewer_ends_with_its_parent_and_frees_its_ports(
     try:
         server = int(parent.stdout.readline())
         assert _running(server)
+        time.sleep(1.0)  # the parent enters viewer.wait(), which hears SIGHUP, after printing
         os.kill(parent.pid, signum)
         # killed at once, or (SIGHUP: a closed terminal) stopped the server and ended
         assert parent.wait(timeout=10) == (0 if signum == signal.SIGHUP else -signum)
