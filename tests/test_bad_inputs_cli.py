@@ -59,6 +59,11 @@ CASES = [
     ("probe", "--mesh {tmp}", "is not a file"),
     ("probe", "--units furlong", "argument --units: invalid choice: 'furlong'"),
     ("probe", "--database {tmp}", "is not a saved model database (no manifest.json)"),
+    # benchmark_curves.py
+    ("benchmark_curves", "--curves 0", "argument --curves: expected an integer >= 1, got 0"),
+    ("benchmark_curves", "--contacts 2", "argument --contacts: expected an integer >= 3, got 2"),
+    ("benchmark_curves", "--precision -1", "argument --precision: expected a finite number"),
+    ("benchmark_curves", "--out {file}/curves", "--out {file}/curves.json: cannot create"),
     # user_meshes.py
     ("user_meshes", "{file}", "is a file; expected a directory"),
     ("user_meshes", "{tmp} --units ft", "argument --units: invalid choice: 'ft'"),

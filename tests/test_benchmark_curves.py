@@ -1,16 +1,15 @@
-"""scripts/benchmark_curves.py: rates and timings of the Chapter 3 tree, written as JSON
-and Markdown."""
+"""The Chapter 3 tree's benchmark (scripts/benchmark_curves.py): rates and timings,
+written as JSON and Markdown."""
 
 import json
 from pathlib import Path
 
-from testing_scripts import load_script
+from recognition.evaluation.curve_benchmark import CurveBenchmarkConfig, run
 
 
 def test_benchmark_writes_rates_and_timings(tmp_path: Path) -> None:
-    bench = load_script("benchmark_curves")
     out = tmp_path / "curves"
-    report = bench.run(bench.CurveBenchmarkConfig(curves=2, out=out))
+    report = run(CurveBenchmarkConfig(curves=2, out=out))
     payload = json.loads(out.with_suffix(".json").read_text())
     assert set(payload["classes"]) == set(report["classes"])
     assert {"command", "date", "machine"} <= set(payload)

@@ -1,0 +1,134 @@
+"""The Chapter 3 recognition tree timed and scored on exact local geometry at a few
+contacts: for every class (and the quartic, a curve of no class) random curves of
+:func:`~recognition.curves.random_curve`, each at random contacts of its interval,
+mirrored and reversed at random; exact kappa, kappa_s and tangent rotations go to
+:func:`~recognition.curves.recognize_curve` with a stated relative uncertainty. Reports
+the rate of correct decisions and the wall time per call (median, 90th percentile, max).
+"""
+
+from __future__ import annotations
+
+import os
+import platform
+import time
+from dataclasses import asdict, dataclass
+from datetime import UTC, datetime
+from pathlib import Path
+
+import numpy as np
+
+from recognition.curves import CurveKind, InputUncertainty, random_curve, recognize_curve
+from recognition.curves.families import TREE_CLASSES
+from recognition.files import write_atomic, write_json_atomic
+
+__all__ = ["CurveBenchmarkConfig", "markdown", "run"]
+
+
+@dataclass(frozen=True)
+class CurveBenchmarkConfig:
+    """Settings of the benchmark.
+
+    Attributes
+    ----------
+    curves : int
+        Random curves per class.
+    contacts : int
+        Contacts per curve.
+    precision : float
+        Relative uncertainty of kappa, kappa_s (and radians of the tangent angles).
+    seed : int
+    out : Path or None
+        Write ``<out>.json`` and ``<out>.md``.
+    arguments : tuple of str
+        The command line, for the report.
+    """
+
+    curves: int = 100
+    contacts: int = 3
+    precision: float = 1e-9
+    seed: int = 0
+    out: Path | None = None
+    arguments: tuple[str, ...] = ()
+
+
+def _exact_contacts(
+    kind: CurveKind, rng: np.random.Generator, m: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """kappa, kappa_s and tangent rotations at m random contacts of a random curve."""
+    curve, t0, t1 = random_curve(kind, rng)
+    t = np.sort(rng.uniform(min(t0, t1), max(t0, t1), m))
+    dense = np.unique(np.concatenate([t, np.linspace(t[0], t[-1], 2001)]))
+    phi = np.unwrap(curve.phi(dense))[np.searchsorted(dense, t)]
+    kappa, kappa_s = curve.kappa(t), curve.kappa_s(t)
+    if rng.integers(2):  # mirror image
+        kappa, kappa_s, phi = -kappa, -kappa_s, -phi
+    if rng.integers(2):  # the other direction of traversal
+        kappa, kappa_s, phi = -kappa[::-1], kappa_s[::-1], phi[::-1]
+    return kappa, kappa_s, phi - phi[0]
+
+
+def run(config: CurveBenchmarkConfig) -> dict[str, object]:
+    """Rates and timings per class; written to ``config.out`` when given."""
+    rng = np.random.default_rng(config.seed)
+    uncertainty = InputUncertainty.relative(config.precision)
+    per_class: dict[str, dict[str, object]] = {}
+    all_ms: list[float] = []
+    for kind in (*TREE_CLASSES, CurveKind.QUARTIC):
+        expected = kind if kind in TREE_CLASSES else CurveKind.UNCLASSIFIED
+        ms, correct = [], 0
+        for _ in range(config.curves):
+            kappa, kappa_s, dphi = _exact_contacts(kind, rng, config.contacts)
+            start = time.perf_counter()
+            result = recognize_curve(kappa, kappa_s, dphi, uncertainty=uncertainty)
+            ms.append(1e3 * (time.perf_counter() - start))
+            correct += result.kind is expected
+        all_ms += ms
+        per_class[kind.value] = {
+            "correct_rate": correct / config.curves,
+            "median_ms": float(np.median(ms)),
+            "p90_ms": float(np.percentile(ms, 90)),
+            "max_ms": float(np.max(ms)),
+        }
+    report: dict[str, object] = {
+        "command": " ".join(("python scripts/benchmark_curves.py", *config.arguments)),
+        "date": datetime.now(UTC).isoformat(timespec="seconds"),
+        "machine": f"{platform.machine()} {platform.processor() or ''} {platform.system()} "
+        f"python {platform.python_version()}, {os.cpu_count()} cores, load average "
+        f"{os.getloadavg()[0]:.1f} at the start",
+        "config": {k: str(v) if isinstance(v, Path) else v for k, v in asdict(config).items()},
+        "classes": per_class,
+        "all": {
+            "median_ms": float(np.median(all_ms)),
+            "p90_ms": float(np.percentile(all_ms, 90)),
+            "max_ms": float(np.max(all_ms)),
+        },
+    }
+    if config.out is not None:
+        write_json_atomic(config.out.with_suffix(".json"), report)
+        data = markdown(report).encode()
+        write_atomic(config.out.with_suffix(".md"), lambda f: f.write(data))
+    return report
+
+
+def markdown(report: dict[str, object]) -> str:
+    lines = [
+        "# Chapter 3 recognition tree: exact local geometry",
+        "",
+        f"`{report['command']}`, {report['date']}, {report['machine']}.",
+        "",
+        "| class | correct | median ms | p90 ms | max ms |",
+        "| :-- | --: | --: | --: | --: |",
+    ]
+    classes = report["classes"]
+    assert isinstance(classes, dict)
+    for name, row in classes.items():
+        lines.append(
+            f"| {name} | {100 * row['correct_rate']:.0f} % | {row['median_ms']:.1f} | "
+            f"{row['p90_ms']:.1f} | {row['max_ms']:.1f} |"
+        )
+    total = report["all"]
+    assert isinstance(total, dict)
+    lines.append(
+        f"| all | | {total['median_ms']:.1f} | {total['p90_ms']:.1f} | {total['max_ms']:.1f} |"
+    )
+    return "\n".join(lines) + "\n"
