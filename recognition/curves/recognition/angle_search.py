@@ -26,6 +26,7 @@ __all__ = [
     "SHAPE_STEPS",
     "SPREAD_CAP",
     "angle_starts",
+    "local_minima",
 ]
 
 #: Rotations psi tried, uniform over a full turn.
@@ -102,10 +103,17 @@ def _cells(
     return log_size, valid & np.isfinite(log_size), t, sigma
 
 
-def _local_minima(score: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Cells (shape, psi) no larger than their neighbours; psi is periodic."""
-    padded = np.pad(score, ((1, 1), (0, 0)), constant_values=np.inf)
-    padded = np.concatenate([padded[:, -1:], padded, padded[:, :1]], axis=1)
+def local_minima(
+    score: np.ndarray, periodic_columns: bool = False
+) -> tuple[np.ndarray, np.ndarray]:
+    """Rows and columns of the finite cells of a 2-D score no larger than their eight
+    neighbours; with ``periodic_columns`` the last column neighbours the first (an
+    angle)."""
+    if periodic_columns:
+        padded = np.pad(score, ((1, 1), (0, 0)), constant_values=np.inf)
+        padded = np.concatenate([padded[:, -1:], padded, padded[:, :1]], axis=1)
+    else:
+        padded = np.pad(score, 1, constant_values=np.inf)
     centre = padded[1:-1, 1:-1]
     is_min = np.isfinite(centre)
     n0, n1 = score.shape
@@ -155,7 +163,7 @@ def angle_starts(
         same = np.abs(np.sum(np.where(valid, sigma, 0.0), axis=-1)) == np.sum(valid, axis=-1)
         score = np.sum(weight * dev, axis=-1) / np.sum(weight)
         score = np.where(np.isfinite(mean) & same, score, np.inf)
-    i_shape, i_psi = _local_minima(score)
+    i_shape, i_psi = local_minima(score, periodic_columns=True)
     order = np.argsort(score[i_shape, i_psi], kind="stable")[:n_starts]
     starts: list[tuple[tuple[float, ...], np.ndarray, float, float]] = []
     for i, j in zip(i_shape[order], i_psi[order], strict=True):

@@ -29,6 +29,8 @@ from functools import lru_cache
 
 import numpy as np
 
+from recognition.curves.recognition.angle_search import local_minima
+
 __all__ = [
     "B_EXTENT",
     "PARAMETER_GRID",
@@ -187,20 +189,6 @@ def _pairs(left: np.ndarray, right: np.ndarray) -> tuple[np.ndarray, np.ndarray]
     return i, start + np.arange(i.size)
 
 
-def _local_minima(score: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Cells of a 2-D score no larger than their eight neighbours (finite only)."""
-    padded = np.pad(score, 1, constant_values=np.inf)
-    centre = padded[1:-1, 1:-1]
-    is_min = np.isfinite(centre)
-    n0, n1 = score.shape
-    for di in (-1, 0, 1):
-        for dj in (-1, 0, 1):
-            if di or dj:
-                is_min &= centre <= padded[1 + di : 1 + di + n0, 1 + dj : 1 + dj + n1]
-    ib, ip = np.nonzero(is_min)
-    return ib, ip
-
-
 def _wrap(angle: np.ndarray) -> np.ndarray:
     """Angles in [-pi, pi]."""
     return np.asarray(angle - (2.0 * np.pi) * np.rint(angle / (2.0 * np.pi)))
@@ -261,7 +249,7 @@ def spline_starts(
     root_of = np.full(n_shapes, -1)
     root_of[base.shape[on_best]] = np.flatnonzero(on_best)
     grid = score.reshape(table.p.shape)
-    ib, ip = _local_minima(grid)
+    ib, ip = local_minima(grid)
     order = np.argsort(grid[ib, ip], kind="stable")[:n_starts]
     ib, ip = ib[order], ip[order]
     if ib.size == 0:
