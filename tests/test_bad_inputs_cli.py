@@ -19,6 +19,7 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
+from testing_processes import running
 from testing_scripts import SCRIPTS, load_script
 
 from recognition.evaluation import Record
@@ -208,14 +209,6 @@ def _processes_with_parent(pid: int) -> list[int]:
     return children
 
 
-def _running(pid: int) -> bool:
-    try:
-        state = Path(f"/proc/{pid}/stat").read_text().rpartition(")")[2].split()[0]
-    except FileNotFoundError:
-        return False
-    return state != "Z"
-
-
 def _interrupt(argv: list[str], *, until: str | None = None, children: int = 0) -> tuple[int, str]:
     """Runs a script in a process group of its own; once ``until`` is on its stderr and it
     has ``children`` child processes, sends the group SIGINT (a terminal's Ctrl-C).
@@ -261,7 +254,7 @@ def _interrupt(argv: list[str], *, until: str | None = None, children: int = 0) 
             reader.join(timeout=5)
             raise AssertionError(f"no exit 20 s after SIGINT:\n{err.decode()}") from None
         reader.join(timeout=5)
-        assert not [w for w in workers if _running(w)], "a worker outlived the script"
+        assert not [w for w in workers if running(w)], "a worker outlived the script"
     finally:
         if process.poll() is None:
             os.killpg(process.pid, signal.SIGKILL)

@@ -61,7 +61,7 @@ def test_curves_on_every_kind_are_recognised_and_located(kinds) -> None:
     equivalent (the gear's symmetric images among them), and the capped sphere's poses
     reported free to turn (curves on a sphere cannot fix a pose)."""
     database = ModelDatabase(kinds).prepare()
-    right = located = total = 0
+    right = located = total = off_sphere = 0
     for k, (name, model) in enumerate(kinds.items()):
         for synthetic in _instances(model, 4, seed=k):
             result = database.recognize(synthetic.curves)
@@ -72,9 +72,10 @@ def test_curves_on_every_kind_are_recognised_and_located(kinds) -> None:
                 assert own.error_m < 0.03e-3 and own.free_motions >= 2 and own.ambiguous
                 continue
             gaps = np.linalg.norm(own.equivalent_locations - synthetic.point_in_model, axis=1)
+            off_sphere += 1
             located += gaps.min() < 1e-3
     assert right >= total - 2
-    assert located >= total - 4 - 4  # of the 16 off the sphere; flat faces slide
+    assert located >= off_sphere - 4  # flat faces slide
 
 
 def test_the_gear_has_its_symmetries_and_the_free_form_none(kinds) -> None:

@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from testing_processes import running
 
 from tactile_sim.errors import PortInUse, RecordingError, SimulationError
 from tactile_sim.recording import check_ports, serve_recording
@@ -66,15 +67,6 @@ def _cpu_seconds(pid: int) -> float:
     return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
 
 
-def _running(pid: int) -> bool:
-    """The process exists and is not a zombie (Linux /proc)."""
-    try:
-        state = Path(f"/proc/{pid}/stat").read_text().rpartition(")")[2].split()[0]
-    except FileNotFoundError:
-        return False
-    return state != "Z"
-
-
 @pytest.mark.slow
 @pytest.mark.skipif(not LINUX, reason="reads /proc")
 def test_the_web_viewer_idles_once_it_holds_the_recording(recording: Path) -> None:
@@ -110,15 +102,15 @@ def test_the_web_viewer_ends_with_its_parent_and_frees_its_ports(
     )
     try:
         server = int(parent.stdout.readline())
-        assert _running(server)
+        assert running(server)
         time.sleep(1.0)  # the parent enters viewer.wait(), which hears SIGHUP, after printing
         os.kill(parent.pid, signum)
         # killed at once, or (SIGHUP: a closed terminal) stopped the server and ended
         assert parent.wait(timeout=10) == (0 if signum == signal.SIGHUP else -signum)
         deadline = time.monotonic() + 5.0
-        while _running(server) and time.monotonic() < deadline:
+        while running(server) and time.monotonic() < deadline:
             time.sleep(0.05)
-        assert not _running(server)
+        assert not running(server)
         while True:  # the sockets close with the server's last threads
             try:
                 check_ports(*ports)
