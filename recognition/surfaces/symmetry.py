@@ -4,10 +4,11 @@ A gear turned by one tooth, or turned over, is the same gear: data curves fit it
 well at every symmetric image of a pose, so the registration reports those images as
 equivalent answers rather than one of them at random. The search tries turns by 2 pi / k
 (k = 2 ... ``max_order``) about the principal axes of the surface through its centroid,
-and half turns about axes in a principal plane whose two principal moments are equal
-(a gear's or a wheel's flips), each polished on exact closest points
-(:func:`~recognition.surfaces.closest_fit.refine_poses`); a motion is a symmetry when the
-surface, moved, lies within ``tolerance_m`` (mean) of itself.
+and half turns about axes in the plane normal to an axis of order 3 or more, or in a
+principal plane whose two principal moments are equal (a gear's or a wheel's flips),
+each polished on exact closest points
+(:func:`~recognition.surfaces.closest_fit.refine_poses`); a motion is a symmetry when 99 %
+of the surface, moved, lies within ``tolerance_m`` of itself.
 """
 
 from __future__ import annotations
