@@ -43,6 +43,12 @@ def _shuffled() -> list[np.ndarray]:
     return curves
 
 
+def _zigzag() -> np.ndarray:
+    """Five points stepping back and forth between two places (hypothesis found it)."""
+    a, b = [0.015625, 0.015625, 0.015625], [0.0, 0.015625, 0.015625]
+    return np.array([a, b, a, b, a])
+
+
 def _mm_curves() -> list[np.ndarray]:
     """Curves in millimetres (one 0.05 mm off the others), passed as metres."""
     curves = _three(scale=1e3)
@@ -68,6 +74,7 @@ CURVE_CASES = [
     ("huge", lambda: DataCurves([_three()[0] + 1e300, *_three()[1:]]), "within 1000 m"),
     ("repeated", lambda: DataCurves([np.zeros((6, 3)), *_three()[1:]]), "repeats a point"),
     ("unordered", lambda: DataCurves(_shuffled()), "not in order"),
+    ("back and forth", lambda: DataCurves([_zigzag()] * 3), "repeats a point"),
     ("millimetres", lambda: DataCurves(_mm_curves()), "look like millimetres"),
     ("apart", lambda: DataCurves([_three()[0] + 0.01, *_three()[1:]]), "do not meet"),
     ("approach nan", lambda: DataCurves(_three(), approach=[np.nan, 0, 1]), "approach"),

@@ -188,13 +188,13 @@ class DataCurves:
                 f"curve {index} has a coordinate of {np.abs(c).max():.3g} m; expected points "
                 f"within {MAX_COORDINATE_M:g} m of the origin, in metres"
             )
-        steps = np.diff(c, axis=0)
-        step = np.linalg.norm(steps, axis=1)
-        if np.any(step <= 1e-9 * max(float(np.median(step)), 1e-300)):
+        step = np.linalg.norm(np.diff(c, axis=0), axis=1)
+        gap, nearest = cKDTree(c).query(c, k=2)
+        # any two points at one place, next to each other or not (a curve stepping back)
+        if np.any(gap[:, 1] <= 1e-9 * max(float(np.median(step)), 1e-300)):
             raise InvalidCurveData(
                 f"curve {index} repeats a point; expected distinct points in order"
             )
-        _, nearest = cKDTree(c).query(c, k=2)
         far = np.abs(nearest[:, 1] - np.arange(len(c))) > 2
         if np.mean(far) > MAX_UNORDERED:
             raise InvalidCurveData(
