@@ -161,6 +161,10 @@ class LeastSquaresResult:
 
 
 def _take(state: State, rows: NDArray[np.intp]) -> State:
+    """The ``rows`` (sorted, distinct) of every array; all of them: the state itself (not
+    a copy: the solver writes only into states it made)."""
+    if rows.size == len(state[0]):
+        return state
     return tuple(a[rows] for a in state)
 
 
@@ -273,7 +277,7 @@ def damped_least_squares(
         trying = np.arange(active.size)
         kept = np.zeros(active.size, bool)
         steps = np.zeros((active.size, H.shape[-1]))
-        new_state: State = tuple(np.array(a, copy=True) for a in here)
+        new_state: State | None = None  # the moved states, made on the first kept step
         new_cost = current[active].copy()
         while trying.size:
             rows = active[trying]
@@ -285,14 +289,19 @@ def damped_least_squares(
             good = trying[better]
             kept[good] = True
             steps[good] = step[better]
-            _put(new_state, good, _take(moved, np.flatnonzero(better)))
+            if new_state is None and good.size == active.size:
+                new_state = tuple(np.asarray(a) for a in moved)  # every step kept at once
+            elif good.size:
+                if new_state is None:
+                    new_state = tuple(np.array(a, copy=True) for a in here)
+                _put(new_state, good, _take(moved, np.flatnonzero(better)))
             new_cost[good] = moved_cost[better]
             lam[rows[~better]] *= config.grow
             if not config.retry:
                 break
             trying = trying[~better]
             trying = trying[lam[active[trying]] <= config.max_damping]
-        if config.extend and kept.any():
+        if config.extend and new_state is not None:
             extending = np.flatnonzero(kept)
             scale = 1.0
             while extending.size and scale < 1024:
@@ -306,13 +315,17 @@ def damped_least_squares(
         good = np.flatnonzero(kept)
         rows = active[good]
         decrease = current[rows] - new_cost[good]
-        _put(state, rows, _take(new_state, good))
         stop = np.zeros(active.size, bool)
         converged = (
             (decrease < config.rtol * current[rows])
             | (size(_take(here, good), steps[good]) < config.step_tol)
             | (new_cost[good] <= config.atol)
         )
+        if new_state is not None:
+            if rows.size == B:
+                state = new_state  # every problem moved
+            else:
+                _put(state, rows, _take(new_state, good))
         current[rows] = new_cost[good]
         lam[rows] = np.maximum(lam[rows] * config.shrink, config.min_damping)
         stop[good[converged]] = True
