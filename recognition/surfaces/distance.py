@@ -347,86 +347,42 @@ class FieldStack:
         -------
         (C, F, P) float32, or (C, P) with ``paired``
         """
-        which = np.asarray(which, dtype=np.int64)
-        voxel = self.voxel[which]
-        scaled = (frames / voxel[:, None, None]).astype(np.float32)
-        if paired:
-            grid = scaled @ local.transpose(0, 2, 1).astype(np.float32)  # (C, 3, P)
-        else:
-            grid = scaled @ local.reshape(-1, 3).T.astype(np.float32)  # (C, 3, F * P)
-        grid += ((origins - self.origin[which]) / voxel[:, None]).astype(np.float32)[..., None]
-        upper = (self.shape[which] - 1).astype(np.float32)[..., None]
-        np.clip(grid, 0.0, upper, out=grid)
-        np.rint(grid, out=grid)
-        index = grid.astype(np.int32)
-        shape = self.shape[which].astype(np.int32)
-        flat = index[:, 0]
-        flat *= shape[:, 1:2]
-        flat += index[:, 1]
-        flat *= shape[:, 2:3]
-        flat += index[:, 2]
-        flat += self.offset[which].astype(np.int32)[:, None]
-        values = np.take(self.values, flat)
-        return values if paired else values.reshape(len(which), *local.shape[:2])
+        from recognition.surfaces import field_kernels  # numba: imported when first needed
 
-    def _cells(
-        self, points: Array, which: ArrayLike
-    ) -> tuple[IntArray, Array32, IntArray, IntArray, Mask]:
-        """Lower corner (flat index), fractions, strides and the off-grid mask of points."""
-        which = np.asarray(which, dtype=np.int64)
-        g = (points - self.origin[which][:, None, :]) / self.voxel[which][:, None, None]
-        shape = self.shape[which][:, None, :]
-        outside = np.any((g < 0) | (g > shape - 1), axis=-1)
-        g = np.clip(g, 0, shape - 1 - 1e-6)
-        i = np.floor(g).astype(np.int64)
-        frac = (g - i).astype(np.float32)
-        sz = shape[..., 2]
-        sx = shape[..., 1] * sz
-        flat = i[..., 0] * sx + i[..., 1] * sz + i[..., 2] + self.offset[which][:, None]
-        return flat, frac, sx, sz, outside
+        return field_kernels.nearest_in_frames(
+            self.values,
+            self.offset,
+            self.shape,
+            self.origin,
+            self.voxel,
+            np.asarray(which),
+            frames,
+            origins,
+            local,
+            paired,
+        )
 
     def __call__(self, points: Array, which: ArrayLike) -> Array:
         """Trilinearly interpolated signed distance (B, P) at points (B, P, 3) in fields
         ``which`` (B,), metres (``+band`` off a grid)."""
-        flat, f, sx, sz, outside = self._cells(points, which)
-        v = self.values
-        fx, fy, fz = f[..., 0], f[..., 1], f[..., 2]
-        c00 = v[flat] + fx * (v[flat + sx] - v[flat])
-        c10 = v[flat + sz] + fx * (v[flat + sx + sz] - v[flat + sz])
-        c01 = v[flat + 1] + fx * (v[flat + sx + 1] - v[flat + 1])
-        c11 = v[flat + sz + 1] + fx * (v[flat + sx + sz + 1] - v[flat + sz + 1])
-        c0 = c00 + fy * (c10 - c00)
-        c1 = c01 + fy * (c11 - c01)
-        out = (c0 + fz * (c1 - c0)).astype(float)
-        band = self.band[np.asarray(which, dtype=np.int64)][:, None]
-        return np.where(outside, band, out)
+        return self._interpolate(points, which, gradient=False)[0]
 
     def value_and_gradient(self, points: Array, which: ArrayLike) -> tuple[Array, Array]:
         """Interpolated signed distance (B, P) and its gradient (B, P, 3) at points (B, P, 3)
         in fields ``which`` (B,); off a grid: ``+band`` and a zero gradient."""
-        which = np.asarray(which, dtype=np.int64)
-        flat, f, sx, sz, outside = self._cells(points, which)
-        v = self.values
-        c000, c100 = v[flat], v[flat + sx]
-        c010, c110 = v[flat + sz], v[flat + sx + sz]
-        c001, c101 = v[flat + 1], v[flat + sx + 1]
-        c011, c111 = v[flat + sz + 1], v[flat + sx + sz + 1]
-        fx, fy, fz = f[..., 0], f[..., 1], f[..., 2]
-        # interpolate along x, then y, then z, keeping the differences for the gradient
-        a00, a10 = c100 - c000, c110 - c010
-        a01, a11 = c101 - c001, c111 - c011
-        c00, c10 = c000 + fx * a00, c010 + fx * a10
-        c01, c11 = c001 + fx * a01, c011 + fx * a11
-        b0, b1 = c10 - c00, c11 - c01
-        c0, c1 = c00 + fy * b0, c01 + fy * b1
-        value = c0 + fz * (c1 - c0)
-        gx0 = a00 + fy * (a10 - a00)
-        gx1 = a01 + fy * (a11 - a01)
-        dx = gx0 + fz * (gx1 - gx0)
-        dy = b0 + fz * (b1 - b0)
-        dz = c1 - c0
-        inv = (1.0 / self.voxel[which]).astype(np.float32)[:, None, None]
-        grad = np.stack([dx, dy, dz], axis=-1) * inv
-        grad[outside] = 0.0
-        value = np.where(outside, self.band[which][:, None], value.astype(float))
-        return value, grad.astype(float)
+        return self._interpolate(points, which, gradient=True)
+
+    def _interpolate(self, points: Array, which: ArrayLike, gradient: bool) -> tuple[Array, Array]:
+        from recognition.surfaces import field_kernels  # numba: imported when first needed
+
+        return field_kernels.interpolate(
+            self.values,
+            self.offset,
+            self.shape,
+            self.origin,
+            self.voxel,
+            self.band,
+            np.asarray(which),
+            points,
+            gradient,
+        )

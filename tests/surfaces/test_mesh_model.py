@@ -6,6 +6,7 @@ import trimesh
 from testing_meshes import blob, cylinder, sphere, torus
 
 from recognition.errors import InvalidModel
+from recognition.rigid import rotation_from_vector
 from recognition.surfaces.distance import MeshDistance
 from recognition.surfaces.mesh_model import (
     MeshModel,
@@ -271,3 +272,14 @@ def test_field_stack_reads_each_field_as_the_field_itself():
         np.testing.assert_allclose(near[0], field.nearest(p), atol=1e-9)
         paired = stack.nearest_in_frames(which, frames, np.zeros((6, 3)), p, paired=True)
         np.testing.assert_allclose(paired, field.nearest(p), atol=1e-9)
+        # turned frames and shifted origins place the pattern where the field reads it
+        turned = rotation_from_vector(rng.normal(size=(6, 3)))
+        origins = rng.normal(scale=2e-3, size=(6, 3))
+        local = np.einsum("cji,cpj->cpi", turned, p - origins[:, None, :])  # frames^T (p - o)
+        placed = stack.nearest_in_frames(which, turned, origins, local, paired=True)
+        assert np.mean(placed == field.nearest(p)) > 0.99  # half-way points may round apart
+    # a point that is not a number reads as off the grid, in every lookup
+    bad = np.full((1, 1, 3), np.nan)
+    assert stack(bad, [0])[0, 0] == models[0].distance_field.band
+    assert np.all(stack.value_and_gradient(bad, [0])[1] == 0)
+    assert np.isfinite(stack.nearest_in_frames([0], np.eye(3)[None], np.zeros((1, 3)), bad)).all()

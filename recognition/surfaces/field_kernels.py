@@ -1,0 +1,193 @@
+"""Compiled loops of the stacked distance fields' lookups (:class:`~recognition.surfaces.
+distance.FieldStack`).
+
+The fast mode screens tens of thousands of candidate poses per recognition and slides
+thousands of them down the fields by Gauss-Newton (Section 4.2.2's search, batched): one
+nearest-voxel read or one trilinear interpolation with its gradient per data point and
+pose. Written as numpy expressions, each lookup makes some sixty passes over arrays of a
+hundred thousand points; here each point is read and finished in one pass (numba, compiled
+once and cached on disk). The arithmetic is that of the numpy expressions, in the same
+order and precision (float32 values and frames, float64 positions): the interpolation
+gives the same bits, and the nearest voxel is the same except that a coordinate exactly
+half-way between two voxel centres goes to the upper one (``np.rint`` would round it to
+even, at twice the cost).
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = ["interpolate", "nearest_in_frames"]
+
+Array = NDArray[np.float64]
+Array32 = NDArray[np.float32]
+IntArray = NDArray[np.int64]
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _voxel(g: np.float32, upper: np.float32) -> int:  # pragma: no cover - compiled
+    """The nearest voxel index of grid coordinate g, clamped to [0, upper] (half-way: the
+    upper one; not a number: 0)."""
+    if not g >= 0:
+        return 0
+    return int(min(g, upper) + np.float32(0.5))
+
+
+@numba.njit(cache=True, nogil=True)
+def _nearest(
+    values: Array32,
+    offset: IntArray,
+    shape: IntArray,
+    origin: Array,
+    voxel: Array,
+    which: IntArray,
+    frames: Array,
+    origins: Array,
+    local: Array,
+    paired: bool,
+) -> Array32:  # pragma: no cover - compiled
+    C, F, P = len(which), local.shape[0], local.shape[1]
+    out = np.empty((C, 1 if paired else F, P), np.float32)
+    scaled = np.empty((3, 3), np.float32)
+    shift = np.empty(3, np.float32)
+    upper = np.empty(3, np.float32)
+    for c in range(C):
+        w = which[c]
+        for a in range(3):
+            for b in range(3):
+                scaled[a, b] = np.float32(frames[c, a, b] / voxel[w])
+            shift[a] = np.float32((origins[c, a] - origin[w, a]) / voxel[w])
+            upper[a] = np.float32(shape[w, a] - 1)
+        s1, s2, base = shape[w, 1], shape[w, 2], offset[w]
+        for f in range(out.shape[1]):
+            pattern = c if paired else f
+            for j in range(P):
+                q0 = np.float32(local[pattern, j, 0])
+                q1 = np.float32(local[pattern, j, 1])
+                q2 = np.float32(local[pattern, j, 2])
+                i0 = _voxel(
+                    scaled[0, 0] * q0 + scaled[0, 1] * q1 + scaled[0, 2] * q2 + shift[0], upper[0]
+                )
+                i1 = _voxel(
+                    scaled[1, 0] * q0 + scaled[1, 1] * q1 + scaled[1, 2] * q2 + shift[1], upper[1]
+                )
+                i2 = _voxel(
+                    scaled[2, 0] * q0 + scaled[2, 1] * q1 + scaled[2, 2] * q2 + shift[2], upper[2]
+                )
+                out[c, f, j] = values[base + (i0 * s1 + i1) * s2 + i2]
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def _interpolate(
+    values: Array32,
+    offset: IntArray,
+    shape: IntArray,
+    origin: Array,
+    voxel: Array,
+    band: Array,
+    which: IntArray,
+    points: Array,
+    gradient: bool,
+) -> tuple[Array, Array]:  # pragma: no cover - compiled
+    B, P = points.shape[0], points.shape[1]
+    value = np.empty((B, P))
+    grad = np.zeros((B, P, 3) if gradient else (0, 0, 3))
+    for b in range(B):
+        w = which[b]
+        n0, n1, n2 = shape[w, 0], shape[w, 1], shape[w, 2]
+        sz = n2
+        sx = n1 * n2
+        inv = np.float32(1.0 / voxel[w])
+        for j in range(P):
+            g0 = (points[b, j, 0] - origin[w, 0]) / voxel[w]
+            g1 = (points[b, j, 1] - origin[w, 1]) / voxel[w]
+            g2 = (points[b, j, 2] - origin[w, 2]) / voxel[w]
+            inside = 0 <= g0 <= n0 - 1 and 0 <= g1 <= n1 - 1 and 0 <= g2 <= n2 - 1
+            if not inside:  # (or not a number)
+                value[b, j] = band[w]  # off the grid: the far value, no gradient
+                continue
+            g0 = min(g0, n0 - 1 - 1e-6)
+            g1 = min(g1, n1 - 1 - 1e-6)
+            g2 = min(g2, n2 - 1 - 1e-6)
+            i0, i1, i2 = np.floor(g0), np.floor(g1), np.floor(g2)
+            fx, fy, fz = np.float32(g0 - i0), np.float32(g1 - i1), np.float32(g2 - i2)
+            flat = np.int64(i0) * sx + np.int64(i1) * sz + np.int64(i2) + offset[w]
+            c000, c100 = values[flat], values[flat + sx]
+            c010, c110 = values[flat + sz], values[flat + sx + sz]
+            c001, c101 = values[flat + 1], values[flat + sx + 1]
+            c011, c111 = values[flat + sz + 1], values[flat + sx + sz + 1]
+            # along x, then y, then z, keeping the differences for the gradient
+            a00, a10 = c100 - c000, c110 - c010
+            a01, a11 = c101 - c001, c111 - c011
+            c00, c10 = c000 + fx * a00, c010 + fx * a10
+            c01, c11 = c001 + fx * a01, c011 + fx * a11
+            b0, b1 = c10 - c00, c11 - c01
+            c0, c1 = c00 + fy * b0, c01 + fy * b1
+            value[b, j] = c0 + fz * (c1 - c0)
+            if gradient:
+                gx0 = a00 + fy * (a10 - a00)
+                gx1 = a01 + fy * (a11 - a01)
+                grad[b, j, 0] = (gx0 + fz * (gx1 - gx0)) * inv
+                grad[b, j, 1] = (b0 + fz * (b1 - b0)) * inv
+                grad[b, j, 2] = (c1 - c0) * inv
+    return value, grad
+
+
+def nearest_in_frames(
+    values: Array32,
+    offset: IntArray,
+    shape: IntArray,
+    origin: Array,
+    voxel: Array,
+    which: IntArray,
+    frames: Array,
+    origins: Array,
+    local: Array,
+    paired: bool,
+) -> Array32:
+    """Value at the nearest voxel centre of ``origins[c] + frames[c] @ local[f, j]`` in
+    field ``which[c]``, (C, F, P), or (C, P) with ``paired`` (pattern c for frame c);
+    positions off a grid read its nearest boundary voxel."""
+    out = _nearest(
+        values,
+        offset,
+        shape,
+        origin,
+        voxel,
+        np.ascontiguousarray(which, np.int64),
+        np.ascontiguousarray(frames, np.float64),
+        np.ascontiguousarray(origins, np.float64),
+        np.ascontiguousarray(local, np.float64),
+        paired,
+    )
+    return out[:, 0] if paired else out
+
+
+def interpolate(
+    values: Array32,
+    offset: IntArray,
+    shape: IntArray,
+    origin: Array,
+    voxel: Array,
+    band: Array,
+    which: IntArray,
+    points: Array,
+    gradient: bool,
+) -> tuple[Array, Array]:
+    """Trilinear value (B, P) at points (B, P, 3) in fields ``which`` (B,) and, with
+    ``gradient``, its gradient (B, P, 3) (else an empty array); off a grid ``band`` and a
+    zero gradient."""
+    return _interpolate(
+        values,
+        offset,
+        shape,
+        origin,
+        voxel,
+        band,
+        np.ascontiguousarray(which, np.int64),
+        np.ascontiguousarray(points, np.float64),
+        gradient,
+    )
