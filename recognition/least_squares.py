@@ -6,7 +6,9 @@ points, the closed-form registration over (u, v, phi) and over a rigid motion, a
 cubic-spline fit of Chapter 3. A problem is a state (a tuple of arrays, each with the
 batch on its first axis) that the caller knows how to move (``retract``), to score
 (``cost``) and to linearise (``linearize``: residuals r and their Jacobian J with
-respect to the step). Each iteration solves, for every problem still running,
+respect to the step; or ``normal_equations``: J^T J and J^T r at once, for callers that
+assemble them faster than the batched products). Each iteration solves, for every problem
+still running,
 
     (J^T J + lambda D) step = -J^T r
 
@@ -221,7 +223,8 @@ def damped_least_squares(
     state: State,
     *,
     cost: Callable[[State], Array],
-    linearize: Callable[[State], tuple[Array, Array]],
+    linearize: Callable[[State], tuple[Array, Array]] | None = None,
+    normal_equations: Callable[[State], tuple[Array, Array]] | None = None,
     retract: Callable[[State, Array], State],
     config: LeastSquaresConfig = LeastSquaresConfig(),
     step_size: Callable[[State, Array], Array] | None = None,
@@ -237,9 +240,12 @@ def damped_least_squares(
     cost : callable
         ``cost(state) -> (B,)``: what a kept step must lower (usually the mean or sum
         of the squared residuals; any cost the linearisation approximates).
-    linearize : callable
+    linearize : callable, optional
         ``linearize(state) -> (r (B, m), J (B, m, n))``: residuals and their Jacobian
         with respect to the step.
+    normal_equations : callable, optional
+        ``normal_equations(state) -> (J^T J (B, n, n), J^T r (B, n))``: instead of
+        ``linearize`` (exactly one of the two is given).
     retract : callable
         ``retract(state, step (B, n)) -> state``: the states moved by the steps.
     config : LeastSquaresConfig
@@ -252,6 +258,8 @@ def damped_least_squares(
     monitor : callable, optional
         ``monitor(state) -> (B,)`` recorded in the trace (default: the cost).
     """
+    if (linearize is None) == (normal_equations is None):
+        raise ValueError("give exactly one of linearize and normal_equations")
     state = tuple(np.array(a, copy=True) for a in state)
     B = len(state[0])
     current = np.array(cost(state), dtype=float)
@@ -269,10 +277,14 @@ def damped_least_squares(
             break
         iterations[active] += 1
         here = _take(state, active)
-        r, J = linearize(here)
-        JT = np.swapaxes(J, 1, 2)
-        H = JT @ J
-        g = (JT @ r[..., None])[..., 0]
+        if normal_equations is not None:
+            H, g = normal_equations(here)
+        else:
+            assert linearize is not None
+            r, J = linearize(here)
+            JT = np.swapaxes(J, 1, 2)
+            H = JT @ J
+            g = (JT @ r[..., None])[..., 0]
         # trial steps; with retry, rejected ones again with more damping
         trying = np.arange(active.size)
         kept = np.zeros(active.size, bool)

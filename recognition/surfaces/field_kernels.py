@@ -1,5 +1,6 @@
-"""Compiled loops of the stacked distance fields' lookups (:class:`~recognition.surfaces.
-distance.FieldStack`).
+"""Compiled loops of the fast search: the stacked distance fields' lookups
+(:class:`~recognition.surfaces.distance.FieldStack`) and the normal equations of a pose's
+residuals on them.
 
 The fast mode screens tens of thousands of candidate poses per recognition and slides
 thousands of them down the fields by Gauss-Newton (Section 4.2.2's search, batched): one
@@ -19,7 +20,7 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["interpolate", "nearest_in_frames"]
+__all__ = ["interpolate", "nearest_in_frames", "rigid_normal_equations"]
 
 Array = NDArray[np.float64]
 Array32 = NDArray[np.float32]
@@ -190,4 +191,49 @@ def interpolate(
         np.ascontiguousarray(which, np.int64),
         np.ascontiguousarray(points, np.float64),
         gradient,
+    )
+
+
+@numba.njit(cache=True, nogil=True)
+def _rigid_normal_equations(
+    X: Array, r: Array, g: Array, clip: Array
+) -> tuple[Array, Array]:  # pragma: no cover - compiled
+    B, P = r.shape
+    H = np.zeros((B, 6, 6))
+    b = np.zeros((B, 6))
+    j = np.empty(6)
+    for k in range(B):
+        c0 = c1 = c2 = 0.0
+        for i in range(P):
+            c0 += X[k, i, 0]
+            c1 += X[k, i, 1]
+            c2 += X[k, i, 2]
+        c0, c1, c2 = c0 / P, c1 / P, c2 / P
+        for i in range(P):
+            if not abs(r[k, i]) <= clip[k]:
+                continue  # beyond the clip: no pull
+            d0, d1, d2 = X[k, i, 0] - c0, X[k, i, 1] - c1, X[k, i, 2] - c2
+            n0, n1, n2 = g[k, i, 0], g[k, i, 1], g[k, i, 2]
+            j[0], j[1], j[2] = d1 * n2 - d2 * n1, d2 * n0 - d0 * n2, d0 * n1 - d1 * n0
+            j[3], j[4], j[5] = n0, n1, n2
+            for a in range(6):
+                b[k, a] += j[a] * r[k, i]
+                for e in range(a, 6):
+                    H[k, a, e] += j[a] * j[e]
+        for a in range(6):
+            for e in range(a):
+                H[k, a, e] = H[k, e, a]
+    return H, b
+
+
+def rigid_normal_equations(X: Array, r: Array, g: Array, clip: Array) -> tuple[Array, Array]:
+    """J^T J (B, 6, 6) and J^T r (B, 6) of residuals r (B, P) at points X (B, P, 3) with
+    gradients g (B, P, 3) under a small rigid motion (rotation vector about the centroid
+    of each pose's points, then translation): row i of J is ((x_i - c) x g_i, g_i). A
+    residual beyond its pose's ``clip`` (B,) is left out (a truncated quadratic)."""
+    return _rigid_normal_equations(
+        np.ascontiguousarray(X, np.float64),
+        np.ascontiguousarray(r, np.float64),
+        np.ascontiguousarray(g, np.float64),
+        np.ascontiguousarray(clip, np.float64),
     )

@@ -114,3 +114,32 @@ def test_held_components_stay_on_their_bound():
         config=LeastSquaresConfig(max_iterations=100, rtol=0.0, step_tol=1e-14, retry=True),
     )
     np.testing.assert_allclose(result.state[0][0], [0.5, 0.25], atol=1e-9)
+
+
+def _normal_equations(state):
+    r, J = _linearize(state)
+    JT = np.swapaxes(J, 1, 2)
+    return JT @ J, (JT @ r[..., None])[..., 0]
+
+
+def test_normal_equations_stand_for_the_linearisation():
+    starts = np.array([[-1.2, 1.0], [2.0, -1.0], [0.0, 0.0]])
+    config = LeastSquaresConfig(max_iterations=200, rtol=0.0, step_tol=1e-14)
+    by_jacobian = _solve(starts)
+    by_normal = damped_least_squares(
+        (starts,), cost=_cost, normal_equations=_normal_equations, retract=_retract, config=config
+    )
+    np.testing.assert_allclose(by_normal.state[0], by_jacobian.state[0], atol=1e-12)
+    np.testing.assert_array_equal(by_normal.iterations, by_jacobian.iterations)
+    for given in ({}, {"linearize": _linearize, "normal_equations": _normal_equations}):
+        with pytest.raises(ValueError, match="exactly one"):
+            damped_least_squares((starts,), cost=_cost, retract=_retract, **given)
+
+
+def test_a_kept_batch_is_never_written_through_to_the_caller():
+    # every step of every problem kept: the solver hands its own arrays on, never the input
+    starts = np.array([[-1.2, 1.0], [2.0, -1.0]])
+    before = starts.copy()
+    result = _solve(starts)
+    np.testing.assert_array_equal(starts, before)
+    assert not np.shares_memory(result.state[0], starts)

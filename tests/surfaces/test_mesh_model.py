@@ -283,3 +283,22 @@ def test_field_stack_reads_each_field_as_the_field_itself():
     assert stack(bad, [0])[0, 0] == models[0].distance_field.band
     assert np.all(stack.value_and_gradient(bad, [0])[1] == 0)
     assert np.isfinite(stack.nearest_in_frames([0], np.eye(3)[None], np.zeros((1, 3)), bad)).all()
+
+
+def test_rigid_normal_equations_are_those_of_the_pose_jacobian():
+    from recognition.rigid import cross
+    from recognition.surfaces.field_kernels import rigid_normal_equations
+
+    rng = np.random.default_rng(2)
+    X = rng.normal(scale=0.01, size=(5, 12, 3))
+    r = rng.normal(scale=1e-4, size=(5, 12))
+    g = rng.normal(size=(5, 12, 3))
+    clip = np.full(5, 1.2e-4)
+    c = X.mean(axis=1, keepdims=True)
+    J = np.concatenate([cross(X - c, g), g], axis=-1)  # rotation about c, then translation
+    inlier = np.abs(r) <= clip[:, None]
+    J, r_in = np.where(inlier[..., None], J, 0.0), np.where(inlier, r, 0.0)
+    H, b = rigid_normal_equations(X, r, g, clip)
+    np.testing.assert_allclose(H, np.swapaxes(J, 1, 2) @ J, rtol=1e-12, atol=1e-18)
+    np.testing.assert_allclose(b, np.einsum("kpi,kp->ki", J, r_in), rtol=1e-12, atol=1e-20)
+    assert 0 < inlier.mean() < 1  # the clip leaves some residuals out

@@ -178,6 +178,12 @@ class FastConfig:
         by p, to within ``fit_noise_factor`` times the data's noise plus ``fit_floor_m``
         (:func:`~recognition.surfaces.registration.data.data_fit_residual_m`); otherwise
         (p on a crease) candidates are not restricted by curvature.
+    screen_prune_ratio : float or None
+        A model whose best screened RMS residual (after the first Gauss-Newton steps on
+        the screening points) exceeds this multiple of the best model's stops there, its
+        screened poses scored as they are; None: never. Over 110 synthetic instances on
+        22 models the true model's was at most 3.8 times the best; 8 stops about 13 of
+        22 models before the coarse stage.
     prune_ratio : float or None
         A model whose best coarse RMS residual exceeds this multiple of the best
         model's stops before the final stage; None: never.
@@ -215,6 +221,7 @@ class FastConfig:
     outlier_floor_m: float = 0.1e-3
     fit_noise_factor: float = 5.0
     fit_floor_m: float = 5.0e-6
+    screen_prune_ratio: float | None = 8.0
     prune_ratio: float | None = 4.0
     polish_ratio: float = 1.5
     polish_margin_m: float = 0.01e-3

@@ -12,8 +12,9 @@ every model is screened in one vectorised batch on the models' narrow-band signe
 distance fields with a few points per arm of the data; the best poses of each model slide
 into their basins by batched Gauss-Newton over all six degrees of freedom on ever more
 points, near-duplicates dropped between stages; each stage's loss is a truncated
-quadratic, so that a gross outlier does not pull the pose. A model whose coarse fit is
-far worse than the best model's stops there. The reported error is the mean
+quadratic, so that a gross outlier does not pull the pose. A model whose screened or
+coarse fit is far worse than the best model's stops there (most models of a database stop
+after the first steps). The reported error is the mean
 point-to-surface distance (4.8), each point counted at most the outlier threshold
 (:func:`~recognition.surfaces.registration.data.outlier_threshold_m`), exact (closest
 points on the triangles, pose polished) for the models that can win. When even the best
@@ -32,7 +33,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from recognition.least_squares import LeastSquaresConfig, State, damped_least_squares
-from recognition.rigid import cross, pose_matrix, rotation_about, rotation_from_vector
+from recognition.rigid import pose_matrix, rotation_about, rotation_from_vector
 from recognition.surfaces.data_curves import DataCurves
 from recognition.surfaces.distance import FieldStack
 from recognition.surfaces.local_geometry import LocalSurfaceGeometry
@@ -97,10 +98,9 @@ def _gauss_newton(
     rotation turns about the centroid of the placed points. Returns R, t, the RMS
     residual per start (clipped residuals at the clip) and the best RMS after each step.
     """
-    pts_T = np.ascontiguousarray(points.T)
 
     def evaluate(R: Array, t: Array, which: IntArray, clip: Array) -> State:
-        X = (R @ pts_T).transpose(0, 2, 1) + t[:, None, :]
+        X = points @ R.transpose(0, 2, 1) + t[:, None, :]  # (B, P, 3), C order
         r, g = stack.value_and_gradient(X, which)
         return R, t, which, X, r, g, clip
 
@@ -108,12 +108,10 @@ def _gauss_newton(
         r, clip = state[4], state[6]
         return np.mean(np.minimum(r * r, clip[:, None] ** 2), axis=1)
 
-    def linearize(state: State) -> tuple[Array, Array]:
-        X, r, g, clip = state[3], state[4], state[5], state[6]
-        c = X.mean(axis=1)
-        J = np.concatenate([cross(X - c[:, None, :], g), g], axis=-1)
-        inlier = np.abs(r) <= clip[:, None]
-        return np.where(inlier, r, 0.0), np.where(inlier[..., None], J, 0.0)
+    from recognition.surfaces import field_kernels  # numba: imported when first needed
+
+    def normal_equations(state: State) -> tuple[Array, Array]:
+        return field_kernels.rigid_normal_equations(*state[3:7])
 
     def retract(state: State, step: Array) -> State:
         R, t, which, X = state[:4]
@@ -130,7 +128,7 @@ def _gauss_newton(
     result = damped_least_squares(
         state,
         cost=cost,
-        linearize=linearize,
+        normal_equations=normal_equations,
         retract=retract,
         config=LeastSquaresConfig(
             max_iterations=iterations,
@@ -350,28 +348,46 @@ def _search(
             seconds[w] += time.perf_counter() - start
         return out
 
-    poses = batched(
+    status = [RegistrationStatus.CONVERGED] * n
+
+    def prune(poses: list[_Poses | None], ratio: float | None) -> list[_Poses | None]:
+        """The poses of the models still running whose best RMS is within ``ratio`` of
+        the best model's (None for the others, now pruned)."""
+        rms = {
+            w: float(p.rms.min())
+            for w, p in enumerate(poses)
+            if p is not None and p.rms is not None and status[w] is RegistrationStatus.CONVERGED
+        }
+        if ratio is not None and rms:
+            best = min(rms.values())
+            for w, value in rms.items():
+                if value > ratio * best:
+                    status[w] = RegistrationStatus.PRUNED
+        return [
+            p if s is RegistrationStatus.CONVERGED else None
+            for p, s in zip(poses, status, strict=True)
+        ]
+
+    first = batched(
         [p for p, _ in screened], points[screen_idx], search.screen_iterations, threshold_m
     )
-    poses = batched(
-        distinct(poses, search.n_coarse), points[coarse_idx], search.coarse_iterations, threshold_m
+    coarse = batched(
+        distinct(prune(first, config.screen_prune_ratio), search.n_coarse),
+        points[coarse_idx],
+        search.coarse_iterations,
+        threshold_m,
     )
-    status = [RegistrationStatus.CONVERGED] * n
-    coarse_rms = {w: float(p.rms.min()) for w, p in enumerate(poses) if p and p.rms is not None}
-    if config.prune_ratio is not None and coarse_rms:
-        best = min(coarse_rms.values())
-        for w, value in coarse_rms.items():
-            if value > config.prune_ratio * best:
-                status[w] = RegistrationStatus.PRUNED
-    final = [
-        p if s is RegistrationStatus.CONVERGED else None for p, s in zip(poses, status, strict=True)
-    ]
-    final = batched(distinct(final, search.n_final), points, search.final_iterations, threshold_m)
-    # the best n_final poses of every model (a pruned model's coarse ones) scored in one
-    # batch, the least RMS residual first
+    final = batched(
+        distinct(prune(coarse, config.prune_ratio), search.n_final),
+        points,
+        search.final_iterations,
+        threshold_m,
+    )
+    # the best n_final poses of every model (a pruned model's from the stage it stopped
+    # at) scored in one batch, the least RMS residual first
     ranked: dict[int, tuple[Array, Array]] = {}
     for w in range(n):
-        source = final[w] if final[w] is not None else poses[w]
+        source = next((p[w] for p in (final, coarse, first) if p[w] is not None), None)
         if source is not None and source.rms is not None:
             order = np.argsort(source.rms, kind="stable")[: search.n_final]
             ranked[w] = (source.R[order], source.t[order])
