@@ -19,7 +19,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy.stats import chi2
+from scipy.special import chdtri
 
 from recognition.curves.families import (
     N_PARAMETERS,
@@ -442,7 +442,7 @@ def acceptance_statistic(
     dof = max(n_residuals - n_unknowns, 1)
     if tolerance is not None:
         return float(tolerance * tolerance * dof)
-    return float(chi2.isf(significance, dof))
+    return float(chdtri(dof, significance))
 
 
 def precise(data: ContactData) -> bool:

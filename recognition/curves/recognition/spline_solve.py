@@ -33,7 +33,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.polynomial import polynomial as npoly
-from scipy.signal import convolve2d
 
 from recognition.curves.reduction import reduce_cubic_spline
 from recognition.errors import DegenerateGeometry
@@ -79,8 +78,16 @@ class SplineCandidates:
 
 
 def _times(p: np.ndarray, q: np.ndarray) -> np.ndarray:
-    """Product of polynomials in (w, t), arrays [w power, t power], truncated to (4, 6)."""
-    return np.asarray(convolve2d(p, q)[:4, :6])
+    """Product of polynomials in (w, t), arrays [w power, t power], truncated to (4, 6).
+
+    The 2-D convolution as one 1-D convolution: rows padded to the product's width and
+    laid end to end, so that w^i t^j lies at i * width + j in both factors and product.
+    """
+    rows, width = p.shape[0] + q.shape[0] - 1, p.shape[1] + q.shape[1] - 1
+    a, b = np.zeros((p.shape[0], width)), np.zeros((q.shape[0], width))
+    a[:, : p.shape[1]], b[:, : q.shape[1]] = p, q
+    full = np.convolve(a.ravel(), b.ravel())[: rows * width].reshape(rows, width)
+    return full[:4, :6]
 
 
 def _polynomial(terms: dict[tuple[int, int], float]) -> np.ndarray:

@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy.stats import chi2
+from scipy.special import chdtri
 
 from recognition.curves.estimation import LocalGeometry, local_fit_geometry
 from recognition.curves.families import N_PARAMETERS, TREE_CLASSES, CurveKind
@@ -129,7 +129,7 @@ def _decided(fits: Sequence[ClassFit], test: Test, complexity_factor: float) -> 
     if test.significance is None:
         return None
     chosen = _choose_by_test(fits, test.significance)
-    if chosen is not None and chosen.statistic <= chosen.scale * chi2.isf(test.significance, 1):
+    if chosen is not None and chosen.statistic <= chosen.scale * chdtri(1, test.significance):
         return chosen
     return None
 
@@ -204,7 +204,7 @@ def _choose_by_test(fits: Sequence[ClassFit], significance: float) -> ClassFit |
     for level in levels[1:]:
         candidate = min((f for f in consistent if N_PARAMETERS[f.kind] == level), key=_standing)
         extra = N_PARAMETERS[candidate.kind] - N_PARAMETERS[chosen.kind]
-        margin = max(chosen.scale, candidate.scale) * chi2.isf(significance, extra)
+        margin = max(chosen.scale, candidate.scale) * chdtri(extra, significance)
         if chosen.statistic - candidate.statistic > margin:
             chosen = candidate
     return chosen

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy.stats import chi2
+from scipy.special import chdtrc
 
 from recognition.errors import InvalidCurveData
 
@@ -206,4 +206,4 @@ def consistency_test(
         scale, dof = (trace2 / trace, trace * trace / trace2) if trace > 0 else (1.0, 0.0)
     if not dof > 0 or not np.isfinite(statistic):
         return statistic, scale, dof, float("nan") if dof <= 0 else 0.0
-    return statistic, scale, dof, float(chi2.sf(statistic / scale, dof))
+    return statistic, scale, dof, float(chdtrc(dof, statistic / scale))
