@@ -36,7 +36,7 @@ def test_port_in_use_is_reported_with_a_free_alternative() -> None:
             check_ports(port, _free_port())
         alternative = info.value.alternative
         assert alternative != port
-        check_ports(alternative, _free_port())
+        check_ports(alternative, _free_port(alternative))
     assert isinstance(info.value, SimulationError)
 
 
@@ -55,10 +55,14 @@ def test_ports_out_of_range_or_equal_are_refused(
         check_ports(web_port, grpc_port)
 
 
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
+def _free_port(*besides: int) -> int:
+    """A port free now, none of ``besides`` (the system may hand out a port just freed)."""
+    while True:
+        with socket.socket() as s:
+            s.bind(("127.0.0.1", 0))
+            port = s.getsockname()[1]
+        if port not in besides:
+            return port
 
 
 def _cpu_seconds(pid: int) -> float:
@@ -70,7 +74,8 @@ def _cpu_seconds(pid: int) -> float:
 @pytest.mark.slow
 @pytest.mark.skipif(not LINUX, reason="reads /proc")
 def test_the_web_viewer_idles_once_it_holds_the_recording(recording: Path) -> None:
-    with serve_recording(recording, web_port=_free_port(), grpc_port=_free_port()) as viewer:
+    web_port = _free_port()
+    with serve_recording(recording, web_port=web_port, grpc_port=_free_port(web_port)) as viewer:
         time.sleep(1.5)  # reads the recording
         before, start = _cpu_seconds(viewer.process.pid), time.monotonic()
         time.sleep(3.0)
@@ -93,7 +98,8 @@ viewer.wait()
 def test_the_web_viewer_ends_with_its_parent_and_frees_its_ports(
     recording: Path, signum: int
 ) -> None:
-    ports = _free_port(), _free_port()
+    first = _free_port()
+    ports = first, _free_port(first)
     parent = subprocess.Popen(
         [sys.executable, "-c", _PARENT, str(recording), *map(str, ports)],
         cwd=ROOT,
@@ -247,7 +253,8 @@ def _table_fraction(image: np.ndarray) -> float:
 def test_web_viewer_renders_the_recording_in_headless_chromium(
     recording: Path, tmp_path: Path
 ) -> None:
-    web_port, grpc_port = _free_port(), _free_port()
+    web_port = _free_port()
+    grpc_port = _free_port(web_port)
     with serve_recording(recording, web_port=web_port, grpc_port=grpc_port) as viewer:
         assert viewer.url.startswith(f"http://127.0.0.1:{web_port}/")
         browser = _Chromium(tmp_path / "profile")
