@@ -48,5 +48,9 @@ def process_pool(
             process.terminate()
         for process in started:
             process.join(timeout=5)
+        # the pool's manager thread sees its workers gone and ends: wait for it, so that
+        # it does not close its wake-up pipe while the interpreter's exit writes to it
+        # (an "OSError: Bad file descriptor" traceback after the one-line message)
+        pool.shutdown(wait=True)
         raise
     pool.shutdown(wait=True)
