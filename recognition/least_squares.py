@@ -302,7 +302,7 @@ def damped_least_squares(
             kept[good] = True
             steps[good] = step[better]
             if new_state is None and good.size == active.size:
-                new_state = tuple(np.asarray(a) for a in moved)  # every step kept at once
+                new_state = moved  # every step kept at once
             elif good.size:
                 if new_state is None:
                     new_state = tuple(np.array(a, copy=True) for a in here)

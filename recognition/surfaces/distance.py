@@ -349,18 +349,19 @@ class FieldStack:
         """
         from recognition.surfaces import field_kernels  # numba: imported when first needed
 
-        return field_kernels.nearest_in_frames(
+        out = field_kernels.nearest_in_frames(
             self.values,
             self.offset,
             self.shape,
             self.origin,
             self.voxel,
-            np.asarray(which),
-            frames,
-            origins,
-            local,
+            np.ascontiguousarray(which, np.int64),
+            np.ascontiguousarray(frames, np.float64),
+            np.ascontiguousarray(origins, np.float64),
+            np.ascontiguousarray(local, np.float64),
             paired,
         )
+        return out[:, 0] if paired else out
 
     def __call__(self, points: Array, which: ArrayLike) -> Array:
         """Trilinearly interpolated signed distance (B, P) at points (B, P, 3) in fields
@@ -382,7 +383,7 @@ class FieldStack:
             self.origin,
             self.voxel,
             self.band,
-            np.asarray(which),
-            points,
+            np.ascontiguousarray(which, np.int64),
+            np.ascontiguousarray(points, np.float64),
             gradient,
         )

@@ -37,7 +37,7 @@ def _voxel(g: np.float32, upper: np.float32) -> int:  # pragma: no cover - compi
 
 
 @numba.njit(cache=True, nogil=True)
-def _nearest(
+def nearest_in_frames(
     values: Array32,
     offset: IntArray,
     shape: IntArray,
@@ -49,6 +49,9 @@ def _nearest(
     local: Array,
     paired: bool,
 ) -> Array32:  # pragma: no cover - compiled
+    """Value at the nearest voxel centre of ``origins[c] + frames[c] @ local[f, j]`` in
+    field ``which[c]``, (C, F, P), or (C, 1, P) with ``paired`` (pattern c for frame c);
+    positions off a grid read its nearest boundary voxel."""
     C, F, P = len(which), local.shape[0], local.shape[1]
     out = np.empty((C, 1 if paired else F, P), np.float32)
     scaled = np.empty((3, 3), np.float32)
@@ -82,7 +85,7 @@ def _nearest(
 
 
 @numba.njit(cache=True, nogil=True)
-def _interpolate(
+def interpolate(
     values: Array32,
     offset: IntArray,
     shape: IntArray,
@@ -93,6 +96,9 @@ def _interpolate(
     points: Array,
     gradient: bool,
 ) -> tuple[Array, Array]:  # pragma: no cover - compiled
+    """Trilinear value (B, P) at points (B, P, 3) in fields ``which`` (B,) and, with
+    ``gradient``, its gradient (B, P, 3) (else an empty array); off a grid ``band`` and a
+    zero gradient."""
     B, P = points.shape[0], points.shape[1]
     value = np.empty((B, P))
     grad = np.zeros((B, P, 3) if gradient else (0, 0, 3))
@@ -137,67 +143,14 @@ def _interpolate(
     return value, grad
 
 
-def nearest_in_frames(
-    values: Array32,
-    offset: IntArray,
-    shape: IntArray,
-    origin: Array,
-    voxel: Array,
-    which: IntArray,
-    frames: Array,
-    origins: Array,
-    local: Array,
-    paired: bool,
-) -> Array32:
-    """Value at the nearest voxel centre of ``origins[c] + frames[c] @ local[f, j]`` in
-    field ``which[c]``, (C, F, P), or (C, P) with ``paired`` (pattern c for frame c);
-    positions off a grid read its nearest boundary voxel."""
-    out = _nearest(
-        values,
-        offset,
-        shape,
-        origin,
-        voxel,
-        np.ascontiguousarray(which, np.int64),
-        np.ascontiguousarray(frames, np.float64),
-        np.ascontiguousarray(origins, np.float64),
-        np.ascontiguousarray(local, np.float64),
-        paired,
-    )
-    return out[:, 0] if paired else out
-
-
-def interpolate(
-    values: Array32,
-    offset: IntArray,
-    shape: IntArray,
-    origin: Array,
-    voxel: Array,
-    band: Array,
-    which: IntArray,
-    points: Array,
-    gradient: bool,
-) -> tuple[Array, Array]:
-    """Trilinear value (B, P) at points (B, P, 3) in fields ``which`` (B,) and, with
-    ``gradient``, its gradient (B, P, 3) (else an empty array); off a grid ``band`` and a
-    zero gradient."""
-    return _interpolate(
-        values,
-        offset,
-        shape,
-        origin,
-        voxel,
-        band,
-        np.ascontiguousarray(which, np.int64),
-        np.ascontiguousarray(points, np.float64),
-        gradient,
-    )
-
-
 @numba.njit(cache=True, nogil=True)
-def _rigid_normal_equations(
+def rigid_normal_equations(
     X: Array, r: Array, g: Array, clip: Array
 ) -> tuple[Array, Array]:  # pragma: no cover - compiled
+    """J^T J (B, 6, 6) and J^T r (B, 6) of residuals r (B, P) at points X (B, P, 3) with
+    gradients g (B, P, 3) under a small rigid motion (rotation vector about the centroid
+    of each pose's points, then translation): row i of J is ((x_i - c) x g_i, g_i). A
+    residual beyond its pose's ``clip`` (B,) is left out (a truncated quadratic)."""
     B, P = r.shape
     H = np.zeros((B, 6, 6))
     b = np.zeros((B, 6))
@@ -224,16 +177,3 @@ def _rigid_normal_equations(
             for e in range(a):
                 H[k, a, e] = H[k, e, a]
     return H, b
-
-
-def rigid_normal_equations(X: Array, r: Array, g: Array, clip: Array) -> tuple[Array, Array]:
-    """J^T J (B, 6, 6) and J^T r (B, 6) of residuals r (B, P) at points X (B, P, 3) with
-    gradients g (B, P, 3) under a small rigid motion (rotation vector about the centroid
-    of each pose's points, then translation): row i of J is ((x_i - c) x g_i, g_i). A
-    residual beyond its pose's ``clip`` (B,) is left out (a truncated quadratic)."""
-    return _rigid_normal_equations(
-        np.ascontiguousarray(X, np.float64),
-        np.ascontiguousarray(r, np.float64),
-        np.ascontiguousarray(g, np.float64),
-        np.ascontiguousarray(clip, np.float64),
-    )
