@@ -269,12 +269,15 @@ def _longest_run(mask: np.ndarray) -> slice:
     return slice(int(starts[i]), int(stops[i]))
 
 
-def joystick_samples(curve: TestCurve, rng: np.random.Generator) -> np.ndarray:
+def joystick_samples(
+    curve: TestCurve, rng: np.random.Generator, noise: float = JOYSTICK_NOISE
+) -> np.ndarray:
     """The thesis's joystick data on ``curve``: on its longest stretch away from cusps
     (speed above a tenth of the median) a random arc whose tangent turns by
     ``JOYSTICK_TURN`` in all (or the whole stretch, if it turns less), scaled to
     ``JOYSTICK_ARC`` cm, a point every ``JOYSTICK_SPACING`` cm with Gaussian noise
-    ``JOYSTICK_NOISE`` cm per coordinate, in a random direction of traversal."""
+    ``noise`` cm per coordinate, in a random direction of traversal (the same arc and
+    direction for the same state of ``rng``, whatever the noise)."""
     lo, hi = curve.t_range
     t = np.linspace(lo, hi, 20001)
     d = curve.derivatives(t)
@@ -293,5 +296,5 @@ def joystick_samples(curve: TestCurve, rng: np.random.Generator) -> np.ndarray:
     scale = JOYSTICK_ARC / (s1 - s0)
     wanted = np.arange(0.0, JOYSTICK_ARC + 1e-9, JOYSTICK_SPACING) / scale + s0
     points = scale * np.stack([np.interp(wanted, s, d[0, 0]), np.interp(wanted, s, d[0, 1])], 1)
-    points = points + rng.normal(scale=JOYSTICK_NOISE, size=points.shape)
+    points = points + noise * rng.normal(size=points.shape)
     return points[::-1] if rng.integers(2) else points

@@ -75,18 +75,27 @@ class EstimateSensitivity:
         Noise variance of each coordinate of each input point, unit^2.
     bias_variance : (m, 3) float
         Squared truncation error of kappa, kappa_s and phi: 1/unit^2, 1/unit^4, rad^2.
+    variance_dof : float
+        Degrees of freedom of the noise variance's estimate over all the points (the
+        residual degrees of freedom of the fits it pools, per point, times the points);
+        infinite when the variance is known.
     """
 
     start: np.ndarray
     gradient: np.ndarray
     point_variance: np.ndarray
     bias_variance: np.ndarray
+    variance_dof: float = float("inf")
 
     def subset(self, indices: ArrayLike) -> EstimateSensitivity:
         """The error model of the estimates at ``indices``."""
         idx = np.asarray(indices)
         return EstimateSensitivity(
-            self.start[idx], self.gradient[idx], self.point_variance, self.bias_variance[idx]
+            self.start[idx],
+            self.gradient[idx],
+            self.point_variance,
+            self.bias_variance[idx],
+            self.variance_dof,
         )
 
     def covariance(self) -> np.ndarray:
@@ -361,6 +370,7 @@ def local_fit_geometry(
     point_variance = _point_variance(
         np.sum(residual**2, axis=1) / (window - degree - extra - 1), window, p.shape[0]
     )
+    variance_dof = p.shape[0] * (window - degree - extra - 1) / window
     origin, ex, ey, scale, u, v, coef, fit, check = (
         a[::step] for a in (origin, ex, ey, scale, u, v, coef, fit, check)
     )
@@ -396,7 +406,9 @@ def local_fit_geometry(
 
     if kappa_window is None:
         gradient = grad[..., None] * ordinate[:, None]
-        sensitivity = EstimateSensitivity(start, gradient, point_variance, bias_variance)
+        sensitivity = EstimateSensitivity(
+            start, gradient, point_variance, bias_variance, variance_dof
+        )
         return LocalGeometry(index, position, s, phi, kappa, q[:, 1], sensitivity)
 
     # kappa_s from quadratic fits of kappa(s) over kappa_window estimates, and the quartic
@@ -429,7 +441,9 @@ def local_fit_geometry(
     kappa_s_noise = np.einsum("mjk,mj->m", bias_gradient**2, span_var)
     bias_variance = bias_variance[sl].copy()
     bias_variance[:, 1] = _smoothed_bias_variance(kappa_s_bias**2, kappa_s_noise, kappa_window)
-    sensitivity = EstimateSensitivity(start[:m2], gradient, point_variance, bias_variance)
+    sensitivity = EstimateSensitivity(
+        start[:m2], gradient, point_variance, bias_variance, variance_dof
+    )
     return LocalGeometry(
         index[sl], position[sl], s[sl] - s[h], phi[sl], kappa[sl], kappa_s, sensitivity
     )

@@ -113,6 +113,13 @@ class CurveRecognition:
     runner_up : ClassFit or None
         The next-best class: the best-fitting of the others (the best of all when
         unclassified).
+    decided_by : str
+        ``"invariants"``: the thesis's tree on local estimates (:func:`recognize_curve`);
+        ``"points"``: every class fitted to the sampled points themselves
+        (:func:`recognize_points`).
+    noise : float or None
+        ``"points"``: the points' noise (standard deviation per coordinate) the tests
+        assumed.
     """
 
     kind: CurveKind
@@ -127,6 +134,8 @@ class CurveRecognition:
     p_value: float = 0.0
     significance: float = float("nan")
     runner_up: ClassFit | None = None
+    decided_by: str = "invariants"
+    noise: float | None = None
 
     @property
     def fit(self) -> ClassFit | None:

@@ -9,12 +9,13 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy.special import chdtri
+from scipy.special import chdtrc, chdtri, fdtrc
 
 from recognition.curves.estimation import LocalGeometry, local_fit_geometry
 from recognition.curves.families import N_PARAMETERS, TREE_CLASSES, CurveKind
 from recognition.curves.recognition.hypotheses import Test, fit_conics, fit_hypothesis
-from recognition.curves.recognition.results import ClassFit, CurveRecognition
+from recognition.curves.recognition.point_fit import PointFit, fit_classes
+from recognition.curves.recognition.results import ClassFit, CurveRecognition, canonical_form
 from recognition.curves.recognition.signature_fit import (
     ContactData,
     best_fit,
@@ -227,6 +228,57 @@ def _choose_by_tolerance(
     return None
 
 
+def _decision(
+    chosen: ClassFit | None,
+    fits: Sequence[ClassFit],
+    significance: float,
+    *,
+    tolerance: float | None = None,
+    decided_by: str = "invariants",
+    noise: float | None = None,
+) -> CurveRecognition:
+    """The recognition of the ``chosen`` class among ``fits`` (unclassified when None),
+    with the next-best class as runner-up; the parabola reports its invariant I_p only."""
+    others = sorted((f for f in fits if f is not chosen), key=_standing)
+    runner_up = others[0] if others else None
+    if chosen is None:
+        return CurveRecognition(
+            CurveKind.UNCLASSIFIED,
+            {},
+            np.array([]),
+            {},
+            {},
+            float("inf"),
+            tuple(fits),
+            tolerance,
+            float("inf"),
+            0.0,
+            significance,
+            runner_up,
+            decided_by,
+            noise,
+        )
+    invariants = dict(chosen.invariants)
+    if chosen.kind is CurveKind.PARABOLA and invariants:
+        invariants = {"I_p": invariants["I_p"]}
+    return CurveRecognition(
+        chosen.kind,
+        chosen.parameters,
+        chosen.t,
+        invariants,
+        {name: _relative_spread(v) for name, v in invariants.items()},
+        chosen.residual,
+        tuple(fits),
+        tolerance,
+        chosen.statistic,
+        chosen.p_value,
+        significance,
+        runner_up,
+        decided_by,
+        noise,
+    )
+
+
 def recognize_curve(
     kappa: ArrayLike,
     kappa_s: ArrayLike,
@@ -298,40 +350,7 @@ def recognize_curve(
         chosen = _choose_by_test(fits, significance)
     else:
         chosen = _choose_by_tolerance(fits, tolerance, complexity_factor)
-    others = sorted((f for f in fits if f is not chosen), key=_standing)
-    runner_up = others[0] if others else None
-    if chosen is None:
-        return CurveRecognition(
-            CurveKind.UNCLASSIFIED,
-            {},
-            np.array([]),
-            {},
-            {},
-            float("inf"),
-            tuple(fits),
-            tolerance,
-            float("inf"),
-            0.0,
-            significance,
-            runner_up,
-        )
-    invariants = dict(chosen.invariants)
-    if chosen.kind is CurveKind.PARABOLA:
-        invariants = {"I_p": invariants["I_p"]}
-    return CurveRecognition(
-        chosen.kind,
-        chosen.parameters,
-        chosen.t,
-        invariants,
-        {name: _relative_spread(v) for name, v in invariants.items()},
-        chosen.residual,
-        tuple(fits),
-        tolerance,
-        chosen.statistic,
-        chosen.p_value,
-        significance,
-        runner_up,
-    )
+    return _decision(chosen, fits, significance, tolerance=tolerance)
 
 
 def estimated_uncertainty(geometry: LocalGeometry) -> InputUncertainty:
@@ -350,6 +369,66 @@ def estimated_uncertainty(geometry: LocalGeometry) -> InputUncertainty:
     return InputUncertainty.from_covariance(cov + np.diag(floor**2))
 
 
+def _point_class_fit(
+    fit: PointFit | None, kind: CurveKind, used: LocalGeometry, noise: float, noise_dof: float
+) -> ClassFit:
+    """A class fitted to the points as a :class:`ClassFit`: its statistic is the sum of
+    squared distances over the noise variance; with the noise estimated on ``noise_dof``
+    degrees of freedom its p-value is the F test's (chi-square when the noise is known,
+    ``noise_dof`` infinite)."""
+    if fit is None:
+        return rejected(kind, "no least-squares fit to the points converged")
+    dof = fit.distances.size - fit.n_unknowns
+    statistic = fit.sum_of_squares / noise**2
+    if dof <= 0:
+        p_value = float("nan")
+    elif np.isinf(noise_dof):
+        p_value = float(chdtrc(dof, statistic))
+    else:
+        p_value = float(fdtrc(dof, noise_dof, statistic / dof))
+    u = fit.u[used.index]
+    theta = fit.reduction.theta
+    orientation = 1 if np.median(np.diff(fit.u)) >= 0 else -1
+    params, t, orientation_f, psi = canonical_form(
+        kind, fit.reduction.params, u, float(orientation), -theta
+    )
+    return ClassFit(
+        kind,
+        params,
+        float(np.sqrt(statistic / dof)) if dof > 0 else float("inf"),
+        t,
+        psi,
+        int(orientation_f),
+        per_point=np.abs(fit.distances),
+        statistic=float(statistic),
+        dof=float(dof),
+        p_value=p_value,
+    )
+
+
+def _recognize_by_points(
+    points: np.ndarray, used: LocalGeometry, noise: float, noise_dof: float, significance: float
+) -> CurveRecognition:
+    """Every class fitted to the points themselves (:mod:`.point_fit`), decided as the
+    tree decides (:func:`_choose_by_test`)."""
+    fitted = fit_classes(points)
+    fits = [_point_class_fit(fitted[kind], kind, used, noise, noise_dof) for kind in TREE_CLASSES]
+    chosen = _choose_by_test(fits, significance)
+    return _decision(chosen, fits, significance, decided_by="points", noise=noise)
+
+
+def _estimated_noise(geometry: LocalGeometry) -> tuple[float, float]:
+    """The points' noise (standard deviation per coordinate) from the estimator's error
+    model, and the degrees of freedom of that estimate."""
+    if geometry.sensitivity is None:
+        raise InvalidCurveData(
+            "the estimator gives no error model (LocalGeometry.sensitivity is None): pass "
+            "noise= (the points' standard deviation per coordinate) to recognize_points"
+        )
+    variance = geometry.sensitivity.point_variance
+    return float(np.sqrt(np.mean(variance))), float(geometry.sensitivity.variance_dof)
+
+
 def recognize_points(
     points: ArrayLike,
     *,
@@ -357,16 +436,27 @@ def recognize_points(
     uncertainty: InputUncertainty | None = None,
     significance: float = DEFAULT_SIGNIFICANCE,
     tolerance: float | None = None,
+    decide_by: str | None = None,
+    noise: float | None = None,
     estimator: Callable[..., LocalGeometry] = local_fit_geometry,
     **estimator_options: Any,
 ) -> tuple[CurveRecognition, LocalGeometry]:
-    """Estimate local geometry from ordered tactile points and run the recognition tree
-    (thesis Fig. 3.4).
+    """Recognise the class of a sampled curve from ordered tactile points.
 
-    ``n_estimates`` evenly spaced estimates (of all the estimator returns) are passed to
-    :func:`recognize_curve` together with their tangent rotations and, unless
-    ``uncertainty`` or ``tolerance`` is given, the uncertainty the estimator's own error
-    model gives them (:func:`estimated_uncertainty`).
+    Two decisions (``decide_by``):
+
+    - ``"points"`` (the default unless ``uncertainty`` or ``tolerance`` is given): every
+      class of the tree is fitted to the points themselves by orthogonal distance
+      regression (:mod:`.point_fit`) and tested by its sum of squared distances over the
+      points' noise: an F test with the noise estimated by the estimator's error model
+      (its local check fits' residuals), a chi-square test when ``noise`` is given. The
+      class is chosen among the consistent ones as the tree chooses (the simplest unless
+      a more complex one fits significantly better). Contact parameters are those of the
+      points the estimates belong to.
+    - ``"invariants"``: the thesis's tree (Fig. 3.4) on ``n_estimates`` evenly spaced
+      local estimates, :func:`recognize_curve` with their tangent rotations and the
+      uncertainty the estimator's own error model gives them
+      (:func:`estimated_uncertainty`), unless ``uncertainty`` or ``tolerance`` is given.
 
     Parameters
     ----------
@@ -375,7 +465,11 @@ def recognize_points(
     n_estimates : int
         Estimates used, at least 3.
     uncertainty, significance, tolerance
-        See :func:`recognize_curve`.
+        See :func:`recognize_curve` (``significance`` serves both decisions).
+    decide_by : {"points", "invariants"}, optional
+    noise : float, optional
+        ``"points"``: the points' known noise (standard deviation per coordinate, the
+        points' unit) instead of the estimate.
     estimator : callable
         ``estimator(points, **estimator_options) -> LocalGeometry``.
 
@@ -389,6 +483,20 @@ def recognize_points(
         raise InvalidCurveData(f"n_estimates must be an integer >= 3, got {n_estimates!r}")
     if n_estimates < 3:
         raise InvalidCurveData(f"n_estimates must be at least 3, got {n_estimates}")
+    if decide_by is None:
+        decide_by = "points" if uncertainty is None and tolerance is None else "invariants"
+    if decide_by not in ("points", "invariants"):
+        raise InvalidCurveData(f"decide_by must be 'points' or 'invariants', got {decide_by!r}")
+    if decide_by == "points" and (uncertainty is not None or tolerance is not None):
+        raise InvalidCurveData(
+            "uncertainty= and tolerance= concern the invariants: give decide_by='invariants'"
+        )
+    if noise is not None and not (
+        isinstance(noise, numbers.Real) and np.isfinite(noise) and noise > 0
+    ):
+        raise InvalidCurveData(f"noise must be a positive number, got {noise!r}")
+    if not (isinstance(significance, numbers.Real) and 0 < significance < 1):
+        raise InvalidCurveData(f"significance must lie in (0, 1), got {significance}")
     geometry = estimator(points, **estimator_options)
     if len(geometry) < 3:
         raise InvalidCurveData("the estimator returned fewer than three estimates")
@@ -399,6 +507,13 @@ def recognize_points(
         raise DegenerateGeometry(
             "the points lie on a straight segment (kappa = 0): no curvature invariants exist"
         )
+    if decide_by == "points":
+        if noise is None:
+            sigma, noise_dof = _estimated_noise(geometry)
+        else:
+            sigma, noise_dof = float(noise), float("inf")
+        p = np.asarray(points, dtype=float)
+        return _recognize_by_points(p, used, sigma, noise_dof, significance), used
     if uncertainty is None and tolerance is None:
         uncertainty = estimated_uncertainty(used)
     result = recognize_curve(
