@@ -14,7 +14,11 @@ from numpy.typing import ArrayLike
 from recognition.curves import invariants as inv
 from recognition.curves.estimation import LocalGeometry, local_fit_geometry
 from recognition.curves.families import CanonicalCurve, CurveKind
-from recognition.curves.recognition import canonical_parameters, recognize_curve
+from recognition.curves.recognition import (
+    canonical_parameters,
+    estimated_uncertainty,
+    recognize_curve,
+)
 from recognition.curves.sampling import SampledCurve, random_curve, sample_by_arc_length
 from recognition.pools import process_pool
 from recognition.reproduction.chapter3.measures import relative_parameter_error
@@ -57,8 +61,11 @@ class CurveExperiment:
         :func:`~recognition.curves.estimation.local_fit_geometry` settings.
     n_estimates : int
         Estimates per curve passed to the recognition tree.
-    tolerance : float
-        Consistency tolerance of the recognition tree.
+    tolerance : float or None
+        Consistency tolerance of the recognition tree; None (the default): the tree's
+        chi-square test with the uncertainty the estimator's own error model gives the
+        estimates (:func:`~recognition.curves.recognition.tree.estimated_uncertainty`),
+        the default of ``recognize_points(..., decide_by="invariants")``.
     seed : int
     """
 
@@ -68,7 +75,7 @@ class CurveExperiment:
     degree: int = 6
     kappa_window: int | None = None
     n_estimates: int = 25
-    tolerance: float = 1e-4
+    tolerance: float | None = None
     seed: int = 0
 
     def estimate(self, points: ArrayLike) -> LocalGeometry:
@@ -84,7 +91,11 @@ class CurveExperiment:
             f"{self.noise_std:g}; local polynomial fit over {self.window} points, degree "
             f"{self.degree}"
             + (f", kappa_s from {self.kappa_window} kappa estimates" if self.kappa_window else "")
-            + f"; tolerance {self.tolerance:g}"
+            + (
+                "; the estimator's own uncertainty"
+                if self.tolerance is None
+                else f"; tolerance {self.tolerance:g}"
+            )
         )
 
 
@@ -253,7 +264,10 @@ def _classify_one(job: tuple[CurveKind, int, CurveExperiment]) -> dict[str, Any]
     g = experiment.estimate(sampled.points)
     pick = np.unique(np.linspace(0, len(g) - 1, min(experiment.n_estimates, len(g))).round())
     g = g.subset(pick.astype(int))
-    result = recognize_curve(g.kappa, g.kappa_s, g.dphi, tolerance=experiment.tolerance)
+    if experiment.tolerance is None:
+        result = recognize_curve(g.kappa, g.kappa_s, g.dphi, uncertainty=estimated_uncertainty(g))
+    else:
+        result = recognize_curve(g.kappa, g.kappa_s, g.dphi, tolerance=experiment.tolerance)
     true = canonical_parameters(kind, curve.params) if kind in CLASSES else curve.params
     own = next((c for c in result.candidates if c.kind is kind), None)
     return {
