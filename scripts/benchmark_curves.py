@@ -1,11 +1,15 @@
-"""Time and score the Chapter 3 recognition tree on exact local geometry at a few contacts.
+"""Time and score the Chapter 3 recognition on exact local geometry or on sampled curves.
 
 python scripts/benchmark_curves.py --curves 100 --contacts 3 --out docs/benchmarks/curves_exact
+python scripts/benchmark_curves.py --curves 100 --spacing 0.05 --noise 0.003 \
+    --out docs/benchmarks/curves_sampled
 
-For every class (and the quartic, a curve of no class) random curves, each at
-``--contacts`` random points, mirrored and reversed at random; exact kappa, kappa_s and
-tangent rotations go to ``recognize_curve`` with the relative uncertainty
-``--precision``. Reports the rate of correct decisions and the wall time per call.
+For every class (and the quartic, a curve of no class) random curves, mirrored and
+reversed at random. Without ``--spacing``: exact kappa, kappa_s and tangent rotations at
+``--contacts`` random points go to ``recognize_curve`` with the relative uncertainty
+``--precision``. With ``--spacing``: points every SPACING of arc length with Gaussian
+noise ``--noise`` per coordinate go to ``recognize_points`` (local fits over
+``--window`` points). Reports the rate of correct decisions and the wall time per call.
 """
 
 from __future__ import annotations
@@ -26,12 +30,25 @@ def main(argv: list[str] | None = None) -> int:
         "--precision", type=real(0.0, low_open=True), default=1e-9, help="relative uncertainty"
     )
     p.add_argument("--seed", type=integer(0), default=0)
+    p.add_argument(
+        "--spacing", type=real(0.0, low_open=True), help="sampled mode: arc length between points"
+    )
+    p.add_argument(
+        "--noise", type=real(0.0), default=0.0, help="sampled mode: noise per coordinate"
+    )
+    p.add_argument("--window", type=integer(5), default=21, help="sampled mode: local fit points")
     p.add_argument("--out", type=Path, help="write OUT.json and OUT.md")
     a = p.parse_args(argv)
     if a.out is not None:
         require_writable(p, "--out", a.out.with_suffix(".json"))
     arguments = tuple(sys.argv[1:] if argv is None else argv)
-    config = CurveBenchmarkConfig(a.curves, a.contacts, a.precision, a.seed, a.out, arguments)
+    if a.spacing is None and (a.noise or "--window" in arguments):
+        p.error("--noise and --window need --spacing (the sampled mode)")
+    if a.window % 2 == 0:
+        p.error(f"--window must be odd, got {a.window}")
+    config = CurveBenchmarkConfig(
+        a.curves, a.contacts, a.precision, a.seed, a.out, arguments, a.spacing, a.noise, a.window
+    )
     return run_cli(lambda: print(markdown(run(config))))
 
 
