@@ -482,6 +482,11 @@ def fit_classes(points: ArrayLike) -> dict[CurveKind, PointFit | None]:
     regression (module docstring); None for a class when no start gives a finite fit or
     the fitted curve is degenerate (e.g. a cubic whose cubic term vanished).
 
+    The classes: the conics of Section 3.2.1 placed by a rigid motion; the parabola as a
+    parametric quadratic (3.4); the cubic spline as any parametric cubic (3.25), reduced to
+    its canonical form (3.35); the cubical and semi-cubical parabolas as cubics with an
+    inflection or a cusp (Section 3.2.2).
+
     Starts: the conics from the algebraic conic fit; the parabola and a first cubic
     spline from parametric polynomials fitted by parameter correction; the cubical and
     semi-cubical parabolas from the best special points at that spline's parameters
