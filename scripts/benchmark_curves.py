@@ -1,7 +1,7 @@
 """Time and score the Chapter 3 recognition on exact local geometry or on sampled curves.
 
 python scripts/benchmark_curves.py --curves 100 --contacts 3 --out docs/benchmarks/curves_exact
-python scripts/benchmark_curves.py --curves 100 --spacing 0.05 --noise 0.003 \
+python scripts/benchmark_curves.py --curves 100 --spacing 0.05 --noise 0.003 --window 11 \
     --out docs/benchmarks/curves_sampled
 
 For every class (and the quartic, a curve of no class) random curves, mirrored and
@@ -9,7 +9,8 @@ reversed at random. Without ``--spacing``: exact kappa, kappa_s and tangent rota
 ``--contacts`` random points go to ``recognize_curve`` with the relative uncertainty
 ``--precision``. With ``--spacing``: points every SPACING of arc length with Gaussian
 noise ``--noise`` per coordinate go to ``recognize_points`` (local fits over
-``--window`` points). Reports the rate of correct decisions and the wall time per call.
+``--window`` points; ``--decide-by invariants`` for the thesis's tree on the estimates).
+Reports the rate of correct decisions and the wall time per call.
 """
 
 from __future__ import annotations
@@ -37,17 +38,34 @@ def main(argv: list[str] | None = None) -> int:
         "--noise", type=real(0.0), default=0.0, help="sampled mode: noise per coordinate"
     )
     p.add_argument("--window", type=integer(5), default=21, help="sampled mode: local fit points")
+    p.add_argument(
+        "--decide-by",
+        choices=("points", "invariants"),
+        default="points",
+        help="sampled mode: recognize_points's decision",
+    )
     p.add_argument("--out", type=Path, help="write OUT.json and OUT.md")
     a = p.parse_args(argv)
     if a.out is not None:
         require_writable(p, "--out", a.out.with_suffix(".json"))
     arguments = tuple(sys.argv[1:] if argv is None else argv)
-    if a.spacing is None and (a.noise or "--window" in arguments):
-        p.error("--noise and --window need --spacing (the sampled mode)")
+    if a.spacing is None and (
+        a.noise or any(x.startswith(("--window", "--decide-by")) for x in arguments)
+    ):
+        p.error("--noise, --window and --decide-by need --spacing (the sampled mode)")
     if a.window % 2 == 0:
         p.error(f"--window must be odd, got {a.window}")
     config = CurveBenchmarkConfig(
-        a.curves, a.contacts, a.precision, a.seed, a.out, arguments, a.spacing, a.noise, a.window
+        a.curves,
+        a.contacts,
+        a.precision,
+        a.seed,
+        a.out,
+        arguments,
+        a.spacing,
+        a.noise,
+        a.window,
+        a.decide_by,
     )
     return run_cli(lambda: print(markdown(run(config))))
 

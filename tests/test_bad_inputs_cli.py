@@ -65,7 +65,7 @@ CASES = [
     ("benchmark_curves", "--contacts 2", "argument --contacts: expected an integer >= 3, got 2"),
     ("benchmark_curves", "--precision -1", "argument --precision: expected a finite number"),
     ("benchmark_curves", "--out {file}/curves", "--out {file}/curves.json: cannot create"),
-    ("benchmark_curves", "--noise 0.01", "--noise and --window need --spacing"),
+    ("benchmark_curves", "--noise 0.01", "--noise, --window and --decide-by need --spacing"),
     ("benchmark_curves", "--spacing 0.05 --window 20", "--window must be odd, got 20"),
     ("benchmark_curves", "--spacing 0", "argument --spacing: expected a finite number"),
     # user_meshes.py

@@ -34,6 +34,7 @@ from recognition.curves import (
     sample_by_arc_length,
 )
 from recognition.curves.families import TREE_CLASSES
+from recognition.errors import InvalidArgument
 from recognition.files import write_atomic, write_json_atomic
 
 __all__ = ["CurveBenchmarkConfig", "markdown", "run"]
@@ -58,6 +59,9 @@ class CurveBenchmarkConfig:
         Sampled mode: noise per coordinate (curve units).
     window : int
         Sampled mode: points of each local fit (cubic, kappa_s over as many estimates).
+    decide_by : str
+        Sampled mode: ``recognize_points``'s decision, "points" or "invariants" (the
+        thesis's tree on the local estimates with their propagated uncertainty).
     out : Path or None
         Write ``<out>.json`` and ``<out>.md``.
     arguments : tuple of str
@@ -73,6 +77,7 @@ class CurveBenchmarkConfig:
     spacing: float | None = None
     noise: float = 0.0
     window: int = 21
+    decide_by: str = "points"
 
 
 def _exact_contacts(
@@ -120,8 +125,16 @@ def _decide(
         return decided, time.perf_counter() - start
     points = _sampled_points(kind, rng, config.spacing, config.noise)
     w = config.window
+    if points.shape[0] < 2 * w - 1:
+        raise InvalidArgument(
+            f"a {kind} sampled every {config.spacing:g} has {points.shape[0]} points, fewer "
+            f"than the {2 * w - 1} the local fits over --window {w} need: lower the spacing "
+            "or the window"
+        )
     start = time.perf_counter()
-    decided = recognize_points(points, window=w, degree=3, kappa_window=w)[0].kind
+    decided = recognize_points(
+        points, window=w, degree=3, kappa_window=w, decide_by=config.decide_by
+    )[0].kind
     return decided, time.perf_counter() - start
 
 
@@ -174,7 +187,8 @@ def markdown(report: dict[str, object]) -> str:
     title = (
         "exact local geometry"
         if config.get("spacing") is None
-        else f"points every {config['spacing']:g} with noise {config['noise']:g} per coordinate"
+        else f"points every {config['spacing']:g} with noise {config['noise']:g} per "
+        f"coordinate, decided by the {config.get('decide_by', 'points')}"
     )
     lines = [
         f"# Chapter 3 recognition: {title}",
