@@ -22,6 +22,7 @@ CASES = {
     CurveKind.ELLIPSE: ((2.5, 1.2), (0.3, 2.8)),
     CurveKind.HYPERBOLA: ((1.2, 0.9), (-1.0, 0.5)),
     CurveKind.CUBICAL_PARABOLA: ((1.4, -0.8), (-1.2, 0.9)),
+    # speed at least a tenth of its largest throughout (the fit's limit near a cusp)
     CurveKind.SEMICUBICAL_PARABOLA: ((1.8, -0.9), (0.7, 1.7)),
     CurveKind.CUBIC_SPLINE: ((0.9, -1.1, 0.8), (0.3, 1.7)),
 }

@@ -25,6 +25,9 @@ that leave a polynomial curve unchanged are directions of no change of the dista
 solver's least-norm steps take no step along them. For data of the class with isotropic
 noise of variance sigma^2 per coordinate, the sum of squared distances over sigma^2 is
 chi-square with n - k degrees of freedom, k the class's shape parameters plus 3.
+
+Limit: a semi-cubical piece that runs close to its cusp (speed below a tenth of its
+largest, where no probe can trace it) can end in a local minimum of the fit.
 """
 
 from __future__ import annotations
@@ -346,8 +349,9 @@ def _constrained_basis(kind: CurveKind, t: np.ndarray, beta: float) -> np.ndarra
 
 def _conic_starts(kind: CurveKind, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Starting unknowns of an ellipse or hyperbola from the algebraic conic fit (the
-    smallest singular vector of [x^2, xy, y^2, x, y, 1]), when that conic is of the kind;
-    else from the axes of the points' scatter."""
+    smallest singular vector of [x^2, xy, y^2, x, y, 1]); none when that conic is of the
+    other kind (the arc is then closer to the other conic or, near the boundary between
+    them, to the parabola, which is tested apart)."""
     x, y = points.T
     D = np.stack([x * x, x * y, y * y, x, y, np.ones_like(x)], axis=1)
     A, B, C, Dx, Ey, F = np.linalg.svd(D, full_matrices=False)[2][-1]
@@ -368,13 +372,14 @@ def _conic_starts(kind: CurveKind, points: np.ndarray) -> tuple[np.ndarray, np.n
                 rot = V[:, [i, 1 - i]]
                 ab = np.sqrt([axes[i], -axes[1 - i]])
                 starts.append(_conic_unknowns(ab, rot, centre))
-    if not starts:  # an arc of the scatter's size around its mean, bulging outward
+    if not starts:
         return np.zeros((0, 5)), np.zeros((0, points.shape[0]))
     g = np.array(starts)
     return g, _conic_parameters(kind, g, points)
 
 
 def _conic_unknowns(ab: np.ndarray, rot: np.ndarray, centre: np.ndarray) -> np.ndarray:
+    """(a, b, theta, centre) of a conic with semi-axes ``ab`` along the columns of ``rot``."""
     if np.linalg.det(rot) < 0:
         rot = rot * np.array([1.0, -1.0])
     return np.array([ab[0], ab[1], np.arctan2(rot[1, 0], rot[0, 0]), *centre])
