@@ -165,8 +165,8 @@ def _polynomial_curve(
     eye = np.eye(2)
     if kind in (CurveKind.PARABOLA, CurveKind.CUBIC_SPLINE):
         m = 3 if kind is CurveKind.PARABOLA else 4
-        jac = np.einsum("bnk,cd->bncdk", powers[..., :m], eye).reshape(B, n, 2, 2 * m)
-        jac = np.swapaxes(jac.reshape(B, n, 2, 2, m), 3, 4).reshape(B, n, 2, 2 * m)
+        # unknown 2 k + d is coordinate d of the t^k coefficient
+        jac = np.einsum("bnk,cd->bnckd", powers[..., :m], eye).reshape(B, n, 2, 2 * m)
         return pos, vel, acc, jac
     beta = g[:, 6, None]
     jac = np.zeros((B, n, 2, 7))
@@ -258,9 +258,9 @@ def _solve(
             return None
 
         def cost(state: tuple[np.ndarray, ...]) -> np.ndarray:
-            r, J = _residuals(kind, state[0], state[1], points)
-            out = np.sum(r * r, axis=1)
-            return np.where(np.isfinite(out) & np.isfinite(J).all(axis=(1, 2)), out, np.inf)
+            pos = _curve(kind, state[0], state[1], jacobian=False)[0]
+            out = np.sum((pos - points) ** 2, axis=(1, 2))
+            return np.where(np.isfinite(out), out, np.inf)
 
         def linearize(state: tuple[np.ndarray, ...]) -> tuple[np.ndarray, np.ndarray]:
             return _residuals(kind, state[0], state[1], points)

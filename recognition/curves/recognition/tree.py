@@ -230,6 +230,12 @@ def _choose_by_tolerance(
     return None
 
 
+def _check_significance(significance: float) -> None:
+    """Raise :class:`InvalidCurveData` unless ``significance`` lies in (0, 1)."""
+    if not (isinstance(significance, numbers.Real) and 0 < significance < 1):
+        raise InvalidCurveData(f"significance must lie in (0, 1), got {significance}")
+
+
 def _decision(
     chosen: ClassFit | None,
     fits: Sequence[ClassFit],
@@ -333,8 +339,7 @@ def recognize_curve(
             raise InvalidCurveData(f"tolerance must be positive, got {tolerance}")
         if not (isinstance(complexity_factor, numbers.Real) and complexity_factor >= 1):
             raise InvalidCurveData(f"complexity_factor must be >= 1, got {complexity_factor}")
-    if not (isinstance(significance, numbers.Real) and 0 < significance < 1):
-        raise InvalidCurveData(f"significance must lie in (0, 1), got {significance}")
+    _check_significance(significance)
     if uncertainty is None and tolerance is None:
         uncertainty = InputUncertainty.relative(EXACT_PRECISION)
     if uncertainty is not None and not isinstance(uncertainty, InputUncertainty):
@@ -497,8 +502,7 @@ def recognize_points(
         isinstance(noise, numbers.Real) and np.isfinite(noise) and noise > 0
     ):
         raise InvalidCurveData(f"noise must be a positive number, got {noise!r}")
-    if not (isinstance(significance, numbers.Real) and 0 < significance < 1):
-        raise InvalidCurveData(f"significance must lie in (0, 1), got {significance}")
+    _check_significance(significance)
     geometry = estimator(points, **estimator_options)
     if len(geometry) < 3:
         raise InvalidCurveData("the estimator returned fewer than three estimates")
