@@ -1,7 +1,7 @@
 """Time and score the Chapter 3 recognition on exact local geometry or on sampled curves.
 
 python scripts/benchmark_curves.py --curves 100 --contacts 3 --out docs/benchmarks/curves_exact
-python scripts/benchmark_curves.py --curves 100 --spacing 0.05 --noise 0.003 --window 11 \
+python scripts/benchmark_curves.py --curves 100 --spacing 0.05 --noise 0.003 --window 9 \
     --out docs/benchmarks/curves_sampled
 
 For every class (and the quartic, a curve of no class) random curves, mirrored and

@@ -36,6 +36,7 @@ from recognition.curves import (
 from recognition.curves.families import TREE_CLASSES
 from recognition.errors import InvalidArgument
 from recognition.files import write_atomic, write_json_atomic
+from recognition.rigid import random_planar_motion
 
 __all__ = ["CurveBenchmarkConfig", "markdown", "run"]
 
@@ -102,9 +103,7 @@ def _sampled_points(
     """Noisy samples of a random curve over its interval, placed, mirrored and reversed
     at random."""
     curve, t0, t1 = random_curve(kind, rng)
-    angle, shift = rng.uniform(-np.pi, np.pi), rng.uniform(-5.0, 5.0, 2)
-    c, s = np.cos(angle), np.sin(angle)
-    T = np.array([[c, -s, shift[0]], [s, c, shift[1]], [0.0, 0.0, 1.0]])
+    T = random_planar_motion(rng, 3.0)
     if rng.integers(2):
         T[:2, :2] = T[:2, :2] @ np.diag([1.0, -1.0])
     sampled = sample_by_arc_length(
@@ -125,10 +124,10 @@ def _decide(
         return decided, time.perf_counter() - start
     points = _sampled_points(kind, rng, config.spacing, config.noise)
     w = config.window
-    if points.shape[0] < 2 * w - 1:
+    if points.shape[0] < 2 * w + 1:
         raise InvalidArgument(
             f"a {kind} sampled every {config.spacing:g} has {points.shape[0]} points, fewer "
-            f"than the {2 * w - 1} the local fits over --window {w} need: lower the spacing "
+            f"than the {2 * w + 1} the local fits over --window {w} need: lower the spacing "
             "or the window"
         )
     start = time.perf_counter()
