@@ -235,7 +235,10 @@ def test_the_fallback_search_recovers_a_pose_that_a_sparse_first_pass_misses(mod
     )
 
     model = models["blob"]
-    synthetic = _curves(model, 4000, seed=11, noise=0.01e-3)
+    # vertex 4000 has a near twin 42.7 mm away that fits noisy curves as well (3 of 5
+    # seeds land there even with the full search): an ambiguous place is no test of the
+    # fallback
+    synthetic = _curves(model, 2500, seed=11, noise=0.01e-3)
     # a first pass that hardly searches: few candidates, coarse phi, no refinement
     poor = _poor_search(15e-3, 90.0)
     without = register(
