@@ -5,6 +5,10 @@ Pure geometry (numpy/scipy/trimesh): Chapter 3 of the thesis lives in
 
     from recognition import DataCurves, ModelDatabase, Recognition
 
+A recognition keeps the (model, pose) hypotheses that fit near the best with their
+posterior (``Recognition.belief``, ``.hypotheses``, ``.confidence``); ``verify`` touches
+where they disagree until the answer is sure (``TouchLimits``, ``ModelDatabase.plan_touch``).
+
 The registration settings are one frozen config per mode (``FastConfig``,
 ``ThesisConfig``, ``IcpConfig``, ``ClosedFormConfig``; ``config_for(mode, **fields)``).
 """
@@ -17,6 +21,8 @@ from recognition.errors import (
     NoRealSolution,
     RecognitionError,
 )
+from recognition.surfaces.active_touch import TouchStep, Verification, verify
+from recognition.surfaces.belief import Belief, BeliefConfig, Hypothesis, NoiseModel
 from recognition.surfaces.data_curves import DataCurves
 from recognition.surfaces.database import DATABASE_FORMAT, ModelDatabase
 from recognition.surfaces.mesh_model import MeshModelConfig
@@ -29,13 +35,17 @@ from recognition.surfaces.registration import (
     ThesisConfig,
     config_for,
 )
+from recognition.surfaces.touch_planning import TouchLimits, TouchPlan
 
 __all__ = [
     "DATABASE_FORMAT",
+    "Belief",
+    "BeliefConfig",
     "ClosedFormConfig",
     "DataCurves",
     "DegenerateGeometry",
     "FastConfig",
+    "Hypothesis",
     "IcpConfig",
     "InvalidArgument",
     "InvalidCurveData",
@@ -43,9 +53,15 @@ __all__ = [
     "MeshModelConfig",
     "ModelDatabase",
     "NoRealSolution",
+    "NoiseModel",
     "Recognition",
     "RecognitionError",
     "RegistrationConfig",
     "ThesisConfig",
+    "TouchLimits",
+    "TouchPlan",
+    "TouchStep",
+    "Verification",
     "config_for",
+    "verify",
 ]

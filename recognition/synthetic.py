@@ -21,6 +21,7 @@ from numpy.typing import ArrayLike, NDArray
 from recognition.errors import InvalidCurveData
 from recognition.rigid import random_rigid_motion
 from recognition.surfaces.data_curves import DataCurves
+from recognition.surfaces.distance import MeshDistance
 from recognition.surfaces.sections import mesh_plane_section, resample_around
 
 __all__ = [
@@ -28,6 +29,7 @@ __all__ = [
     "SyntheticCurves",
     "implicit_data_curves",
     "mesh_data_curves",
+    "ray_contact",
     "sampling_plane_normals",
 ]
 
@@ -297,3 +299,46 @@ def implicit_data_curves(
         polyline = _trace_implicit(surface, p, m, 1.05 * half + spacing, spacing / 8.0)
         clean.append(resample_around(polyline, p, n_points, spacing))
     return _finish(clean, p, normal, planes, noise_std, rng, transform, translation_scale)
+
+
+def ray_contact(
+    distance: MeshDistance,
+    T_model_from_data: ArrayLike,
+    start: ArrayLike,
+    direction: ArrayLike,
+    travel_m: float,
+    *,
+    noise_m: float = 0.0,
+    rng: np.random.Generator | None = None,
+    step_m: float = 0.1e-3,
+) -> Array | None:
+    """A touch on a known mesh: where the ray ``start`` + s ``direction`` (data frame,
+    0 <= s <= ``travel_m``) first meets the mesh at the pose ``T_model_from_data``, with
+    isotropic Gaussian noise of ``noise_m`` per axis (drawn from ``rng``); None when it
+    meets nothing. The crossing is bracketed on samples ``step_m`` apart and bisected to
+    1e-9 m.
+    """
+    T = np.asarray(T_model_from_data, dtype=np.float64)
+    a = np.asarray(start, dtype=np.float64)
+    d = np.asarray(direction, dtype=np.float64)
+    d = d / np.linalg.norm(d)
+
+    def signed(s: Array) -> Array:
+        X = (a + s[:, None] * d) @ T[:3, :3].T + T[:3, 3]
+        return distance.signed(X)
+
+    s = np.arange(0.0, travel_m + step_m / 2, step_m)
+    inside = signed(s) <= 0
+    if not inside.any():
+        return None
+    first = int(np.argmax(inside))
+    lo, hi = (s[first - 1], s[first]) if first > 0 else (0.0, 0.0)
+    while hi - lo > 1e-9:
+        mid = 0.5 * (lo + hi)
+        lo, hi = (lo, mid) if signed(np.array([mid]))[0] <= 0 else (mid, hi)
+    point = a + hi * d
+    if noise_m > 0:
+        if rng is None:
+            raise InvalidCurveData("ray_contact with noise needs a random generator (rng)")
+        point = point + rng.normal(0.0, noise_m, 3)
+    return point

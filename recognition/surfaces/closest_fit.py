@@ -26,12 +26,17 @@ def refine_poses(
     iterations: int,
     tolerance: float,
     threshold_m: float,
+    whitening: Array | None = None,
 ) -> tuple[Array, Array, Array]:
     """Poses R (k, 3, 3), t (k, 3) of the points (n, 3) refined on exact closest points
     of a mesh: Levenberg-Marquardt on point-to-plane residuals, each point counted at most
     ``threshold_m``; one closest-point query per step for all poses. Returns R, t and the
     exact distances (k, n) at the results (see
-    :func:`~recognition.surfaces.registration.exact.refine_exact`)."""
+    :func:`~recognition.surfaces.registration.exact.refine_exact`).
+
+    With ``whitening`` W (n, n) (the inverse of a Cholesky factor of the residuals'
+    covariance), the signed residuals r (a point beyond the threshold at it) are fitted
+    in the sense of generalised least squares: |W r|^2 (correlated errors)."""
     reach = float(np.max(np.linalg.norm(points - points.mean(axis=0), axis=1)))
     n = len(points)
 
@@ -41,7 +46,15 @@ def refine_poses(
         k = len(R)
         return R, t, X, distance.reshape(k, n), q.reshape(k, n, 3), face.reshape(k, n)
 
+    def signed(state: State) -> Array:
+        """Point-to-plane residuals (k, n), at most the threshold in size."""
+        X, q, face = state[2], state[4], state[5]
+        r = np.einsum("kij,kij->ki", X - q, distance_to.face_normals[face])
+        return np.clip(r, -threshold_m, threshold_m)
+
     def cost(state: State) -> Array:
+        if whitening is not None:
+            return np.asarray(np.mean((signed(state) @ whitening.T) ** 2, axis=1))
         return np.asarray(np.mean(np.minimum(state[3], threshold_m) ** 2, axis=1))
 
     def linearize(state: State) -> tuple[Array, Array]:
@@ -51,6 +64,10 @@ def refine_poses(
         c = X.mean(axis=1, keepdims=True)
         J = np.concatenate([cross(X - c, normals), normals], axis=2)
         outliers = distance > threshold_m
+        if whitening is not None:
+            r = np.clip(r, -threshold_m, threshold_m) @ whitening.T
+            J = np.einsum("ij,kjc->kic", whitening, np.where(outliers[..., None], 0.0, J))
+            return r, J
         return np.where(outliers, 0.0, r), np.where(outliers[..., None], 0.0, J)
 
     def retract(state: State, step: Array) -> State:

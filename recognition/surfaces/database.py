@@ -5,12 +5,15 @@ from __future__ import annotations
 import os
 import time
 from collections.abc import Mapping
+from dataclasses import replace
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import trimesh
 
 from recognition.errors import InvalidArgument, InvalidCurveData, InvalidModel
+from recognition.surfaces.belief import Belief, BeliefConfig, NoiseModel
 from recognition.surfaces.data_curves import DataCurves
 from recognition.surfaces.database_files import DATABASE_FORMAT, read_models, write_models
 from recognition.surfaces.distance import FieldStack
@@ -23,12 +26,16 @@ from recognition.surfaces.registration import (
     RegistrationMode,
     ThesisConfig,
     data_geometry,
+    data_noise_m,
     rank,
     register_all,
     registration_mode,
 )
 
 __all__ = ["DATABASE_FORMAT", "MeshRegistrationConfig", "ModelDatabase", "Recognition"]
+
+if TYPE_CHECKING:
+    from recognition.surfaces.touch_planning import TouchLimits, TouchPlan
 
 MeshRegistrationConfig = FastConfig | ThesisConfig | IcpConfig
 """The settings of a registration mode on mesh models."""
@@ -158,6 +165,8 @@ class ModelDatabase:
         mode: RegistrationMode | str | None = None,
         max_error_m: float = MAX_ERROR_M,
         models: list[str] | None = None,
+        noise: NoiseModel | None = None,
+        belief: BeliefConfig | None = None,
     ) -> Recognition:
         """Register the curves on every model; the smallest error names the object (4.9).
 
@@ -177,6 +186,12 @@ class ModelDatabase:
             sphere of 100 mm radius lies within 0.01 mm of one of 33 mm).
         models : list of str, optional
             Restrict recognition to these models.
+        noise : NoiseModel, optional
+            The noise model of the result's belief (:mod:`recognition.surfaces.belief`);
+            default: the curves' own scatter and the registration's
+            ``model_mismatch_m`` (at least :class:`NoiseModel`'s default).
+        belief : BeliefConfig, optional
+            Which poses become the belief's hypotheses (default: its defaults).
         """
         start = time.perf_counter()
         names = self._checked_selection(curves, models, max_error_m)
@@ -196,7 +211,49 @@ class ModelDatabase:
         else:
             found = register_all(chosen, curves, config, geometry=geometry, threads=self.threads)
         registrations = dict(zip(names, found, strict=True))
-        return rank(registrations, geometry, time.perf_counter() - start, max_error_m)
+        result = rank(registrations, geometry, time.perf_counter() - start, max_error_m)
+        if noise is None:
+            mismatch = max(getattr(config, "model_mismatch_m", 0.0), NoiseModel.model_mismatch_m)
+            noise = NoiseModel(model_mismatch_m=mismatch)
+        candidates = [
+            (r.model, T, float(e))
+            for r in found
+            if not r.rejected
+            for T, e in zip(
+                r.poses if len(r.poses) else r.T_model_from_data[None],
+                r.pose_errors_m if len(r.pose_errors_m) else [r.error_m],
+                strict=True,
+            )
+        ]
+        hypotheses = Belief.of(
+            self.models,
+            candidates,
+            curves.points,
+            geometry.point,
+            data_noise_m(curves),
+            noise=noise,
+            config=belief or BeliefConfig(),
+        )
+        return replace(result, belief=hypotheses, time_s=time.perf_counter() - start)
+
+    def update(
+        self,
+        belief: Belief,
+        points: np.ndarray | None = None,
+        misses: list[tuple[np.ndarray, np.ndarray, float]] | tuple = (),
+    ) -> Belief:
+        """``belief`` after further contact (:meth:`Belief.with_contacts`): touched
+        ``points`` (k, 3) in the curves' frame, metres, and ``misses`` (start, direction,
+        travel) that met nothing."""
+        return belief.with_contacts(self.models, points, misses)
+
+    def plan_touch(self, belief: Belief, limits: TouchLimits, seed: int = 0) -> TouchPlan | None:
+        """The next touch of greatest expected information gain, or None
+        (:func:`recognition.surfaces.touch_planning.plan_touch`)."""
+        from recognition.surfaces.touch_planning import plan_touch
+
+        field_of = {n: i for i, n in enumerate(self.names)}
+        return plan_touch(belief, self.models, self.field_stack, field_of, limits, seed=seed)
 
     def _checked_selection(
         self, curves: object, models: list[str] | None, max_error_m: float

@@ -16,7 +16,14 @@ from recognition.surfaces.mesh_model import MeshModel
 from recognition.surfaces.registration.ambiguity import Resolution, distinct_poses
 from recognition.surfaces.registration.result import Registration
 
-__all__ = ["exact_distances_m", "exact_error_m", "polish", "refine_exact", "with_exact_error"]
+__all__ = [
+    "exact_distances_m",
+    "exact_error_m",
+    "polish",
+    "refine_exact",
+    "smooth_normals",
+    "with_exact_error",
+]
 
 Array = NDArray[np.float64]
 
@@ -161,11 +168,17 @@ def _inliers_at(
     inliers = distance <= threshold_m
     if inliers.sum() < 6:
         return None
-    corners = model.faces[face[inliers]]
-    weights = trimesh.triangles.points_to_barycentric(model.vertices[corners], q[inliers])
+    return moved[inliers], smooth_normals(model, q[inliers], face[inliers])
+
+
+def smooth_normals(model: MeshModel, points: Array, faces: NDArray[np.int64]) -> Array:
+    """Unit normals (k, 3) at ``points`` (k, 3) on ``faces`` (k,) of the model,
+    interpolated from its vertex normals (on a faceted sphere they point at the centre,
+    so that a turn about it stays free)."""
+    corners = model.faces[faces]
+    weights = trimesh.triangles.points_to_barycentric(model.vertices[corners], points)
     normals = np.einsum("nk,nki->ni", np.clip(weights, 0.0, 1.0), model.normals[corners])
-    normals /= np.maximum(np.linalg.norm(normals, axis=1, keepdims=True), 1e-12)
-    return moved[inliers], normals
+    return normals / np.maximum(np.linalg.norm(normals, axis=1, keepdims=True), 1e-12)
 
 
 def with_exact_error(

@@ -4,12 +4,16 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
 
 from recognition.surfaces.local_geometry import LocalSurfaceGeometry
 from recognition.surfaces.registration.result import Registration
+
+if TYPE_CHECKING:
+    from recognition.surfaces.belief import Belief, Hypothesis
 
 __all__ = ["Recognition", "rank"]
 
@@ -40,6 +44,9 @@ class Recognition:
         Total time, local geometry included.
     geometry : LocalSurfaceGeometry
         The data's normal and principal curvatures at p.
+    belief : Belief or None
+        The distinct (model, pose) hypotheses that fit near the best and their posterior
+        (:mod:`recognition.surfaces.belief`; mesh databases).
     """
 
     name: str | None
@@ -51,6 +58,17 @@ class Recognition:
     timings_s: dict[str, float]
     time_s: float
     geometry: LocalSurfaceGeometry = field(repr=False)
+    belief: Belief | None = field(default=None, repr=False)
+
+    @property
+    def hypotheses(self) -> tuple[Hypothesis, ...]:
+        """The belief's hypotheses, most probable first (empty without a belief)."""
+        return () if self.belief is None else self.belief.hypotheses
+
+    @property
+    def confidence(self) -> float:
+        """Posterior probability of the most probable hypothesis (NaN without a belief)."""
+        return float("nan") if self.belief is None else self.belief.confidence
 
     @property
     def best(self) -> Registration | None:

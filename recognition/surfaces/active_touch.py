@@ -1,0 +1,139 @@
+"""Verification touches: touch where the hypotheses disagree most, until the answer is sure.
+
+After the three curves, :func:`verify` repeats: plan the touch of greatest expected
+information gain (:func:`~recognition.surfaces.touch_planning.plan_touch`), make it
+(``touch``: the robot, or a ray cast on a known surface in a benchmark), refine and
+re-score every hypothesis with all the contact (:meth:`Belief.with_contacts`); it stops
+once the best hypothesis's posterior reaches ``confidence``, the touches are spent, or no
+allowed touch can tell the hypotheses apart. A belief that is sure after the curves makes
+no touch.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from recognition.errors import InvalidArgument
+from recognition.surfaces.belief import Belief
+from recognition.surfaces.database import ModelDatabase
+from recognition.surfaces.touch_planning import TouchLimits, TouchPlan
+
+__all__ = ["TouchStep", "Verification", "verify"]
+
+Array = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class TouchStep:
+    """One verification touch.
+
+    Attributes
+    ----------
+    plan : TouchPlan
+    contact : (3,) float or None
+        The sensed contact point, data frame, metres (None: nothing met within the travel).
+    confidence : float
+        The best hypothesis's posterior after the update.
+    best_model : str or None
+        The best hypothesis's model after the update.
+    recognition_time_s : float
+        Planning and updating, seconds (the touch itself excluded).
+    """
+
+    plan: TouchPlan
+    contact: Array | None
+    confidence: float
+    best_model: str | None
+    recognition_time_s: float
+
+
+@dataclass(frozen=True)
+class Verification:
+    """The belief after the verification loop and its touches.
+
+    Attributes
+    ----------
+    belief : Belief
+    steps : tuple of TouchStep
+    initial_confidence : float
+        Confidence after the curves alone.
+    stop : str
+        Why the loop ended: ``"sure"``, ``"touches spent"`` or ``"no informative touch"``.
+    """
+
+    belief: Belief
+    steps: tuple[TouchStep, ...]
+    initial_confidence: float
+    stop: str
+
+
+def verify(
+    database: ModelDatabase,
+    belief: Belief,
+    touch: Callable[[TouchPlan], Array | None],
+    limits: TouchLimits,
+    *,
+    max_touches: int = 5,
+    confidence: float = 0.99,
+    seed: int = 0,
+) -> Verification:
+    """Touch until sure (module docstring).
+
+    Parameters
+    ----------
+    database : ModelDatabase
+        The models the belief's hypotheses name.
+    belief : Belief
+        After the curves (:attr:`Recognition.belief`).
+    touch : callable
+        ``touch(plan) -> (3,) contact point in the data frame, or None`` (no contact
+        within ``plan.travel_m`` of ``plan.start`` along ``plan.direction``).
+    limits : TouchLimits
+    max_touches : int
+        At most this many touches (0: none, the thesis's behaviour).
+    confidence : float
+        Stop once the best hypothesis's posterior reaches this.
+    seed : int
+        Seeds the candidate touches (same seed, same plans).
+    """
+    if isinstance(max_touches, bool) or not isinstance(max_touches, int) or max_touches < 0:
+        raise InvalidArgument(f"max_touches must be an integer >= 0, got {max_touches!r}")
+    if not 0 < confidence <= 1:
+        raise InvalidArgument(f"confidence must lie in (0, 1], got {confidence!r}")
+    initial = belief.confidence
+    steps: list[TouchStep] = []
+    stop = "touches spent"
+    for k in range(max_touches + 1):
+        if belief.confidence >= confidence:
+            stop = "sure"
+            break
+        if k == max_touches:
+            break
+        start = time.perf_counter()
+        plan = database.plan_touch(belief, limits, seed=seed + k)
+        planned = time.perf_counter() - start
+        if plan is None:
+            stop = "no informative touch"
+            break
+        contact = touch(plan)
+        start = time.perf_counter()
+        if contact is None:
+            belief = database.update(belief, misses=[(plan.start, plan.direction, plan.travel_m)])
+        else:
+            belief = database.update(belief, np.asarray(contact, float)[None])
+        best = belief.best
+        steps.append(
+            TouchStep(
+                plan,
+                None if contact is None else np.asarray(contact, float),
+                belief.confidence,
+                None if best is None else best.model,
+                planned + time.perf_counter() - start,
+            )
+        )
+    return Verification(belief, tuple(steps), initial, stop)

@@ -1,0 +1,535 @@
+"""A belief over (model, pose): the hypotheses that fit near the best, and their posterior.
+
+Three curves through one point can leave several answers that fit about equally well:
+another model, the same model at another pose, or the right pose slid along a nearly
+symmetric surface. :class:`Belief` keeps every distinct (model, pose) hypothesis of a
+recognition that fits near the best, refines each on all the contact there is (the three
+curves and any further touches) and weighs them by the likelihood of the data under a
+stated noise model (:class:`NoiseModel`):
+
+    residual r_i = signed distance of contact point i from the model at the pose,
+    r ~ N(0, Sigma),  Sigma_ij = s^2 [i = j] + m^2 k(|x_i - x_j| / l),
+    k(u) = (1 + sqrt(3) u) exp(-sqrt(3) u)   (Matern 3/2),
+
+sensor noise s independent per point, the object's mismatch from its model m a field of
+correlation length l along the surface (how a real object differs from its scan; the
+simulator's ``--model-error-mm`` draws such a field). Correlated residuals carry less
+evidence than as many independent ones, so the mismatch keeps near-equal fits from
+looking certain. The Matern 3/2 field is once differentiable: a squared-exponential
+kernel (infinitely smooth) calls micrometre roughness of the residuals impossible and
+made the true model of a mismatched object look thousands of log-units worse than it
+is. Each residual is clipped at ``outlier_sigmas`` effective noise levels (a gross outlier
+counts alike under every hypothesis, and is reported). With a uniform prior over the
+hypotheses, the posterior of h is proportional to exp(-r_h^T Sigma^-1 r_h / 2),
+normalised over all hypotheses of all models.
+
+Each hypothesis also carries the uncertainty of its pose (Laplace: the inverse of
+J^T Sigma^-1 J, J the point-to-plane Jacobian of the residuals, with a weak prior) and so
+of where it puts p. The belief's :attr:`~Belief.confidence` is the probability that the
+answer is right: the best hypothesis's model, with p within ``radius_m`` of where the
+best puts it, summed over that model's hypotheses.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.linalg import cho_factor, cho_solve, solve_triangular
+
+from recognition.errors import InvalidArgument
+from recognition.rigid import cross, pose_matrix, rotation_from_vector
+from recognition.surfaces.closest_fit import refine_poses
+from recognition.surfaces.mesh_model import MeshModel
+from recognition.surfaces.registration.ambiguity import distinct_poses
+from recognition.surfaces.registration.exact import smooth_normals
+
+__all__ = ["Belief", "BeliefConfig", "Hypothesis", "NoiseModel"]
+
+Array = NDArray[np.float64]
+
+#: Fixed standard normal samples: the probability that a location lies within a radius
+#: is the fraction of these, scaled by its covariance, that do (same belief, same value).
+_NORMAL_SAMPLES = np.random.default_rng(0).standard_normal((4096, 3))
+
+
+def within_probability(offset: Array, covariance: Array, radius_m: float) -> float:
+    """P(|offset + e| <= radius) for e ~ N(0, covariance) (3, 3), by fixed samples."""
+    w, V = np.linalg.eigh(0.5 * (covariance + covariance.T))
+    e = (_NORMAL_SAMPLES * np.sqrt(np.maximum(w, 0.0))) @ V.T
+    return float(np.mean(np.linalg.norm(offset + e, axis=1) <= radius_m))
+
+
+@dataclass(frozen=True)
+class NoiseModel:
+    """How far contact data lie from the true model at the true pose.
+
+    Attributes
+    ----------
+    sensor_noise_m : float or None
+        Standard deviation of a contact point across the surface, metres; None: the
+        curves' own scatter (:func:`~recognition.surfaces.registration.data.data_noise_m`),
+        at least ``sensor_floor_m``.
+    sensor_floor_m : float
+        Least sensor noise assumed, metres (a fit never resolves below it: the models'
+        own discretisation).
+    model_mismatch_m : float
+        RMS of the object's difference from its model along the normals, metres.
+    correlation_m : float
+        Correlation length of that difference, metres (squared-exponential).
+    outlier_sigmas : float
+        A residual beyond this many effective noise levels sqrt(s^2 + m^2) counts at that
+        level and makes the point an outlier of the hypothesis.
+    outlier_floor_m : float
+        The outlier level is at least this, metres.
+    """
+
+    sensor_noise_m: float | None = None
+    sensor_floor_m: float = 2.0e-6
+    model_mismatch_m: float = 5.0e-6
+    correlation_m: float = 5.0e-3
+    outlier_sigmas: float = 5.0
+    outlier_floor_m: float = 0.1e-3
+
+    def __post_init__(self) -> None:
+        values = {
+            "sensor_floor_m": self.sensor_floor_m,
+            "model_mismatch_m": self.model_mismatch_m,
+            "correlation_m": self.correlation_m,
+            "outlier_sigmas": self.outlier_sigmas,
+            "outlier_floor_m": self.outlier_floor_m,
+        }
+        if self.sensor_noise_m is not None:
+            values["sensor_noise_m"] = self.sensor_noise_m
+        for name, value in values.items():
+            if not (np.isfinite(value) and value >= 0):
+                raise InvalidArgument(f"NoiseModel.{name} must be finite and >= 0, got {value}")
+        if self.correlation_m <= 0 or self.outlier_sigmas <= 0:
+            raise InvalidArgument("NoiseModel: correlation_m and outlier_sigmas must be > 0")
+
+    def sensor_m(self, estimated_m: float) -> float:
+        """The sensor noise to use when the data's own scatter is ``estimated_m``."""
+        own = estimated_m if self.sensor_noise_m is None else self.sensor_noise_m
+        return max(float(own), self.sensor_floor_m)
+
+    def covariance(self, points: Array, sensor_m: float) -> Array:
+        """Sigma (n, n) of the residuals at ``points`` (n, 3), metres^2 (module docstring)."""
+        u = np.linalg.norm(points[:, None, :] - points[None, :, :], axis=-1)
+        u *= np.sqrt(3.0) / self.correlation_m
+        K = self.model_mismatch_m**2 * (1.0 + u) * np.exp(-u)
+        return K + sensor_m**2 * np.eye(len(points))
+
+    def outlier_level_m(self, sensor_m: float) -> float:
+        """Residual level beyond which a point is an outlier, metres."""
+        return max(
+            self.outlier_sigmas * float(np.hypot(sensor_m, self.model_mismatch_m)),
+            self.outlier_floor_m,
+        )
+
+
+@dataclass(frozen=True)
+class BeliefConfig:
+    """Which hypotheses a belief keeps and how it refines them.
+
+    Attributes
+    ----------
+    error_ratio, error_margin_m : float
+        A pose of a recognition becomes a hypothesis when its registration error (4.8) is
+        within ``error_ratio`` times the best plus ``error_margin_m``.
+    max_hypotheses : int
+        At most this many hypotheses (least error first).
+    refine_iterations : int
+        Levenberg-Marquardt steps on exact closest points per update.
+    refine_clip_m : float
+        In the refinement a residual counts at most this (metres): a touch far off a
+        slid pose pulls it back, a gross outlier does not pull.
+    min_posterior : float
+        Hypotheses whose posterior falls below this are dropped after an update.
+    radius_m : float
+        An answer is right when it names the right model and puts p within this of the
+        truth (the confidence's sense), metres.
+    explore_hypotheses, explore_log_gap, explore_steps_m
+        The valleys of the most probable hypotheses explored at each update
+        (:meth:`Belief._explored`).
+    prior_rotation_rad, prior_translation_m : float
+        Standard deviations of the weak prior on each hypothesis's pose about its fit
+        (keeps the Laplace covariance finite where the data leave a motion free).
+    """
+
+    error_ratio: float = 3.0
+    error_margin_m: float = 0.02e-3
+    max_hypotheses: int = 24
+    refine_iterations: int = 4
+    refine_clip_m: float = 2.0e-3
+    min_posterior: float = 1e-9
+    radius_m: float = 1.0e-3
+    explore_hypotheses: int = 3
+    explore_log_gap: float = 10.0
+    explore_steps_m: tuple[float, ...] = (2.0e-3, 4.0e-3, 7.0e-3)
+    prior_rotation_rad: float = 0.2
+    prior_translation_m: float = 0.01
+
+
+@dataclass(frozen=True)
+class Hypothesis:
+    """One answer: a model at a pose, with its fit and posterior.
+
+    Attributes
+    ----------
+    model : str
+    T_model_from_data : (4, 4) float
+    location : (3,) float
+        The data's p on the model, model frame, metres.
+    error_m : float
+        Mean distance of all contact points from the model (4.8), outliers at the
+        outlier level, metres.
+    log_likelihood : float
+        -r^T Sigma^-1 r / 2 of the clipped residuals (module docstring).
+    posterior : float
+    outliers : (k,) int
+        Indices (into :attr:`Belief.points`) of the points beyond the outlier level.
+    pivot : (3,) float
+        The centroid of the data on the model, model frame: the centre of the turns of
+        ``pose_covariance``.
+    pose_covariance : (6, 6) float
+        Laplace covariance of a small motion of the pose, (turn (rad), shift (m)) about
+        ``pivot``, model frame.
+    location_covariance : (3, 3) float
+        Covariance of ``location`` that it implies, metres^2.
+    location_images : (k, 3) float
+        ``location`` and its images under the model's symmetries
+        (:attr:`MeshModel.symmetries`): answers that are the same up to a symmetry of
+        the object.
+    """
+
+    model: str
+    T_model_from_data: Array
+    location: Array
+    error_m: float
+    log_likelihood: float
+    posterior: float
+    outliers: NDArray[np.int64] = field(default_factory=lambda: np.zeros(0, np.int64))
+    pivot: Array = field(default_factory=lambda: np.zeros(3))
+    pose_covariance: Array = field(default_factory=lambda: np.zeros((6, 6)))
+    location_covariance: Array = field(default_factory=lambda: np.zeros((3, 3)))
+    location_images: Array = field(default_factory=lambda: np.zeros((0, 3)))
+
+    def moved(self, motion: Array) -> Array:
+        """T_model_from_data after the small motion (turn, shift) (6,) about ``pivot``."""
+        dR = rotation_from_vector(np.asarray(motion[:3], float)[None])[0]
+        T = self.T_model_from_data
+        t = dR @ (T[:3, 3] - self.pivot) + self.pivot + motion[3:]
+        return pose_matrix(dR @ T[:3, :3], t)
+
+
+@dataclass(frozen=True)
+class Belief:
+    """The posterior over (model, pose) given all contact so far (module docstring).
+
+    Attributes
+    ----------
+    hypotheses : tuple of Hypothesis
+        Most probable first.
+    points : (n, 3) float
+        Every contact point, data frame, metres: the curves' points, then the touches.
+    n_curve_points : int
+        How many of ``points`` are the curves'.
+    point : (3,) float
+        The curves' common point p, data frame.
+    sensor_m : float
+        The sensor noise used, metres.
+    noise : NoiseModel
+    config : BeliefConfig
+    misses : tuple of (start (3,), direction (3,), travel) per touch that met nothing
+    """
+
+    hypotheses: tuple[Hypothesis, ...]
+    points: Array
+    n_curve_points: int
+    point: Array
+    sensor_m: float
+    noise: NoiseModel = NoiseModel()
+    config: BeliefConfig = BeliefConfig()
+    misses: tuple[tuple[Array, Array, float], ...] = ()
+
+    @property
+    def best(self) -> Hypothesis | None:
+        """The most probable hypothesis (None when there is none)."""
+        return self.hypotheses[0] if self.hypotheses else None
+
+    @property
+    def confidence(self) -> float:
+        """Probability that the best hypothesis is right: its model, with p within
+        ``config.radius_m`` of where it puts p (summed over that model's hypotheses, each
+        with its location's uncertainty); 0 when there is none."""
+        if not self.hypotheses:
+            return 0.0
+        best = self.hypotheses[0]
+        total = 0.0
+        for h in self.hypotheses:
+            if h.model == best.model:
+                images = h.location_images if len(h.location_images) else h.location[None]
+                gaps = np.linalg.norm(images - best.location, axis=1)
+                offset = images[int(np.argmin(gaps))] - best.location
+                total += h.posterior * within_probability(
+                    offset, h.location_covariance, self.config.radius_m
+                )
+        return float(min(total, 1.0))
+
+    @property
+    def n_touches(self) -> int:
+        """Touches made so far: contacts beyond the curves, and misses."""
+        return len(self.points) - self.n_curve_points + len(self.misses)
+
+    def model_posteriors(self) -> dict[str, float]:
+        """Posterior of each model: the sum over its hypotheses."""
+        out: dict[str, float] = {}
+        for h in self.hypotheses:
+            out[h.model] = out.get(h.model, 0.0) + h.posterior
+        return out
+
+    @classmethod
+    def of(
+        cls,
+        models: Mapping[str, MeshModel],
+        candidates: Sequence[tuple[str, Array, float]],
+        points: ArrayLike,
+        point: ArrayLike,
+        sensor_estimate_m: float,
+        *,
+        noise: NoiseModel = NoiseModel(),
+        config: BeliefConfig = BeliefConfig(),
+    ) -> Belief:
+        """The belief from candidate poses ``(model, T_model_from_data, error_m)`` (e.g.
+        every pose a recognition ended with): those within the configured window of the
+        least error, refined on ``points`` (n, 3) and scored. ``point``: the curves'
+        common point p; ``sensor_estimate_m``: the curves' own scatter."""
+        usable = [(n, T, e) for n, T, e in candidates if np.isfinite(e) and n in models]
+        points = np.asarray(points, dtype=np.float64)
+        belief = cls(
+            (),
+            points,
+            len(points),
+            np.asarray(point, dtype=np.float64),
+            noise.sensor_m(sensor_estimate_m),
+            noise,
+            config,
+        )
+        if not usable:
+            return belief
+        best = min(e for _, _, e in usable)
+        limit = config.error_ratio * best + config.error_margin_m
+        kept = sorted((c for c in usable if c[2] <= limit), key=lambda c: c[2])
+        kept = kept[: config.max_hypotheses]
+        return belief._rescored([(n, np.asarray(T, float)) for n, T, _ in kept], models)
+
+    def with_contacts(
+        self,
+        models: Mapping[str, MeshModel],
+        points: ArrayLike | None = None,
+        misses: Sequence[tuple[ArrayLike, ArrayLike, float]] = (),
+    ) -> Belief:
+        """The belief after further contact: ``points`` (k, 3) touched (data frame,
+        metres) and ``misses`` (start, unit direction, travel in metres) that met no
+        surface. Every hypothesis is refined on all the points and scored again."""
+        new = np.zeros((0, 3)) if points is None else np.asarray(points, float).reshape(-1, 3)
+        if not np.all(np.isfinite(new)):
+            raise InvalidArgument("contact points must be finite (n, 3) metres")
+        moved = [
+            (np.asarray(s, float), np.asarray(d, float) / np.linalg.norm(d), float(t))
+            for s, d, t in misses
+        ]
+        belief = Belief(
+            (),
+            np.concatenate([self.points, new]),
+            self.n_curve_points,
+            self.point,
+            self.sensor_m,
+            self.noise,
+            self.config,
+            (*self.misses, *moved),
+        )
+        return belief._rescored([(h.model, h.T_model_from_data) for h in self.hypotheses], models)
+
+    def _rescored(
+        self, hypotheses: Sequence[tuple[str, Array]], models: Mapping[str, MeshModel]
+    ) -> Belief:
+        """This belief with ``hypotheses`` (model, T_model_from_data) refined on all the
+        points, the valleys of the most probable explored (:meth:`_explored`),
+        near-duplicates merged, scored and normalised."""
+        config = self.config
+        factor = cho_factor(self.noise.covariance(self.points, self.sensor_m), lower=True)
+        found = self._fitted(hypotheses, models, factor)
+        if not found:
+            return self
+        found += self._fitted(self._explored(found), models, factor)
+        found = _merged(found, self.point)
+        logs = np.array([h.log_likelihood for h in found])
+        weights = np.exp(logs - logs.max())
+        weights /= weights.sum()
+        order = np.argsort(-weights, kind="stable")[: config.max_hypotheses]
+        kept = tuple(
+            replace(found[i], posterior=float(weights[i]))
+            for i in order
+            if weights[i] >= config.min_posterior or i == order[0]
+        )
+        return Belief(
+            kept,
+            self.points,
+            self.n_curve_points,
+            self.point,
+            self.sensor_m,
+            self.noise,
+            config,
+            self.misses,
+        )
+
+    def _fitted(
+        self,
+        hypotheses: Sequence[tuple[str, Array]],
+        models: Mapping[str, MeshModel],
+        factor: tuple[Array, bool],
+    ) -> list[Hypothesis]:
+        """``hypotheses`` (model, T_model_from_data) refined on all the points and scored
+        (posterior 0: not normalised)."""
+        level = self.noise.outlier_level_m(self.sensor_m)
+        lower = np.tril(factor[0])
+        whitening = solve_triangular(lower, np.eye(len(lower)), lower=True)
+        found: list[Hypothesis] = []
+        by_model: dict[str, list[Array]] = {}
+        for name, T in hypotheses:
+            by_model.setdefault(name, []).append(T)
+        for name, poses in by_model.items():
+            model = models[name]
+            T = np.asarray(poses)
+            R, t, _ = refine_poses(
+                model.distance,
+                self.points,
+                T[:, :3, :3],
+                T[:, :3, 3],
+                self.config.refine_iterations,
+                1e-4,
+                max(self.config.refine_clip_m, level),
+                whitening,
+            )
+            moved = np.einsum("nj,kij->kni", self.points, R) + t[:, None, :]
+            distance, closest, face = model.distance.closest(moved.reshape(-1, 3))
+            normals = model.distance.face_normals[face].reshape(moved.shape)
+            side = np.einsum("kni,kni->kn", moved - closest.reshape(moved.shape), normals)
+            signed = np.where(side < 0, -1.0, 1.0) * distance.reshape(len(R), -1)
+            errors = np.mean(np.minimum(np.abs(signed), level), axis=1)
+            for k in range(len(R)):
+                r = np.clip(signed[k], -level, level)
+                log_likelihood = -0.5 * float(r @ cho_solve(factor, r))
+                log_likelihood += self._miss_penalty(model, R[k], t[k])
+                location = R[k] @ self.point + t[k]
+                rows = slice(k * len(self.points), (k + 1) * len(self.points))
+                smooth = smooth_normals(model, closest[rows], face[rows])
+                pivot, pose_cov, location_cov = self._laplace(
+                    moved[k], smooth, np.abs(signed[k]) <= level, location, factor
+                )
+                found.append(
+                    Hypothesis(
+                        name,
+                        pose_matrix(R[k], t[k]),
+                        location,
+                        float(errors[k]),
+                        log_likelihood,
+                        0.0,
+                        np.flatnonzero(np.abs(signed[k]) > level),
+                        pivot,
+                        pose_cov,
+                        location_cov,
+                        np.concatenate(
+                            [
+                                location[None],
+                                model.symmetries[:, :3, :3] @ location + model.symmetries[:, :3, 3],
+                            ]
+                        ),
+                    )
+                )
+        return found
+
+    def _explored(self, found: Sequence[Hypothesis]) -> list[tuple[str, Array]]:
+        """Starts along the valleys of the most probable hypotheses: where the data leave
+        a pose nearly free (a slide along a nearly symmetric surface), a model's mismatch
+        makes several minima along it, far beyond what the Laplace covariance sees. Each
+        of the ``explore_hypotheses`` most likely (within ``explore_log_gap`` of the best)
+        is moved along its two least determined motions (the rotation scaled by the
+        data's reach) by each of ``explore_steps_m`` either way."""
+        config = self.config
+        best = max(h.log_likelihood for h in found)
+        top = sorted(found, key=lambda h: -h.log_likelihood)[: config.explore_hypotheses]
+        reach = max(float(np.max(np.linalg.norm(self.points - self.point, axis=1))), 1e-3)
+        scale = np.r_[np.full(3, reach), np.ones(3)]
+        starts: list[tuple[str, Array]] = []
+        for h in top:
+            if h.log_likelihood < best - config.explore_log_gap:
+                continue
+            C = h.pose_covariance * np.outer(scale, scale)
+            vectors = np.linalg.eigh(0.5 * (C + C.T))[1]
+            for k in (5, 4):
+                direction = vectors[:, k] / scale
+                for step in config.explore_steps_m:
+                    starts += [
+                        (h.model, h.moved(step * direction)),
+                        (h.model, h.moved(-step * direction)),
+                    ]
+        return starts
+
+    def _laplace(
+        self,
+        moved: Array,
+        normals: Array,
+        inliers: NDArray[np.bool_],
+        location: Array,
+        factor: tuple[Array, bool],
+    ) -> tuple[Array, Array, Array]:
+        """The pivot, pose covariance (6, 6) and location covariance (3, 3) of a fit: the
+        inverse of J^T Sigma^-1 J plus the weak prior, J (n, 6) the residuals' change
+        under a turn about the pivot and a shift (outliers do not inform)."""
+        pivot = moved[inliers].mean(axis=0) if inliers.any() else moved.mean(axis=0)
+        J = np.concatenate([cross(moved - pivot, normals), normals], axis=1)
+        J[~inliers] = 0.0
+        prior = np.r_[
+            np.full(3, self.config.prior_rotation_rad**-2),
+            np.full(3, self.config.prior_translation_m**-2),
+        ]
+        information = J.T @ cho_solve(factor, J) + np.diag(prior)
+        pose = np.linalg.inv(information)
+        pose = 0.5 * (pose + pose.T)
+        arm = location - pivot
+        skew = np.array([[0, -arm[2], arm[1]], [arm[2], 0, -arm[0]], [-arm[1], arm[0], 0]])
+        Jp = np.concatenate([-skew, np.eye(3)], axis=1)  # d location / d (turn, shift)
+        return pivot, pose, Jp @ pose @ Jp.T
+
+    def _miss_penalty(self, model: MeshModel, R: Array, t: Array) -> float:
+        """Log-likelihood of the touches that met nothing under a pose: each ray along
+        which the model lies within the travel (a contact it predicts but that did not
+        happen) costs the log-odds of a contact missed by ``outlier_sigmas`` noise
+        levels."""
+        penalty = 0.0
+        level = self.noise.outlier_level_m(self.sensor_m)
+        for start, direction, travel in self.misses:
+            steps = np.arange(0.0, travel - level, 0.1e-3)
+            if steps.size == 0:
+                continue
+            ray = start + steps[:, None] * direction
+            inside = model.distance.signed(ray @ R.T + t) < 0
+            if inside.any():
+                penalty -= 0.5 * self.noise.outlier_sigmas**2
+        return penalty
+
+
+def _merged(found: Sequence[Hypothesis], point: Array) -> list[Hypothesis]:
+    """One hypothesis per distinct pose of each model (the likeliest of those that came
+    to the same answer)."""
+    out: list[Hypothesis] = []
+    for name in dict.fromkeys(h.model for h in found):
+        mine = [h for h in found if h.model == name]
+        T = np.array([h.T_model_from_data for h in mine])
+        score = -np.array([h.log_likelihood for h in mine])
+        out += [mine[k] for k in distinct_poses(T[:, :3, :3], T[:, :3, 3], score, point, len(mine))]
+    return out

@@ -1,0 +1,314 @@
+"""The next touch: the one whose outcome the current hypotheses disagree on most.
+
+Candidate touches are points of the free surface of the most probable hypotheses (model
+vertices placed by their poses, data frame), each approached along its inward normal
+from ``standoff_m`` outside. Under every hypothesis h the approach line meets the surface
+after a depth d_h (read off the models' signed distance fields), or not at all within the
+travel. A touch's outcome is then a mixture of the predicted depths, each blurred by the
+touch's noise sigma and weighted by its posterior w_h; its expected information gain, the
+mutual information between outcome and hypothesis, is bounded below by the pairwise
+Bhattacharyya bound (Kolchinsky and Tracey 2017):
+
+    I >= -sum_i w_i log sum_j w_j exp(-(d_i - d_j)^2 / (8 sigma^2)),
+
+exact when the predictions are far apart or equal; a miss counts as an outcome far from
+every contact. The touch of greatest bound is chosen. Touches the stylus cannot make (a
+surface tilted beyond ``max_tilt_rad`` from ``up``), below ``min_height_m`` (the table),
+too close to contact already made, occluded on the best hypothesis or refused by the
+caller's ``reachable`` are never candidates.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.spatial import cKDTree
+
+from recognition.errors import InvalidArgument
+from recognition.surfaces.belief import Belief
+from recognition.surfaces.distance import FieldStack
+from recognition.surfaces.mesh_model import MeshModel
+
+__all__ = ["TouchLimits", "TouchPlan", "information_gain", "plan_touch", "predicted_depths"]
+
+Array = NDArray[np.float64]
+
+#: A predicted miss counts as a contact this far beyond the travel, metres.
+MISS_DEPTH_M = 1.0
+#: A pose uncertain by more than this along a motion (metres at the data's reach) is
+#: also represented by poses moved along it ...
+SIGMA_FLOOR_M = 0.1e-3
+#: ... by this many standard deviations either way.
+SIGMA_SCALE = 1.5
+
+
+@dataclass(frozen=True)
+class TouchLimits:
+    """What touches the sensor can make, data frame.
+
+    Attributes
+    ----------
+    up : (3,) float
+        Unit vector away from the table (the stylus's axis, pointing up).
+    max_tilt_rad : float
+        Largest angle between a touched surface's normal and ``up``.
+    min_height_m : float
+        Least height along ``up`` (from the data frame's origin) of a touched point: the
+        table top plus a clearance.
+    standoff_m : float
+        The approach starts this far outside the predicted contact.
+    travel_m : float
+        ... and searches this far beyond it.
+    min_separation_m : float
+        Least distance of a touch from contact already made.
+    candidates : int
+        Candidate touches drawn (split over the most probable hypotheses).
+    reachable : callable or None
+        ``reachable(starts (k, 3), directions (k, 3)) -> (k,) bool``: whether the robot
+        can start there and move so (workspace, joint limits); None: everywhere.
+    tip_radius_m, tool_radius_m, tool_length_m : float
+        The sensor: a tip sphere on a straight shaft of this radius and length along
+        ``up`` from the tip's centre. A touch is allowed only where, on the most probable
+        hypothesis, the tip clears the surface (by ``clearance_m``) on its way down to the
+        approach's start, and the shaft above the tip at the predicted contact clears it
+        too (0: a point sensor, no check).
+    clearance_m : float
+    """
+
+    up: Array
+    max_tilt_rad: float = float(np.deg2rad(50.0))
+    min_height_m: float = -np.inf
+    standoff_m: float = 4.0e-3
+    travel_m: float = 6.0e-3
+    min_separation_m: float = 3.0e-3
+    candidates: int = 1200
+    reachable: Callable[[Array, Array], NDArray[np.bool_]] | None = None
+    tip_radius_m: float = 0.0
+    tool_radius_m: float = 0.0
+    tool_length_m: float = 0.0
+    clearance_m: float = 0.5e-3
+
+    def __post_init__(self) -> None:
+        up = np.asarray(self.up, dtype=np.float64).reshape(-1)
+        if up.shape != (3,) or not np.all(np.isfinite(up)) or np.linalg.norm(up) == 0:
+            raise InvalidArgument(f"TouchLimits.up must be a non-zero 3-vector, got {self.up}")
+        object.__setattr__(self, "up", up / np.linalg.norm(up))
+        if not (0 < self.max_tilt_rad <= np.pi / 2):
+            raise InvalidArgument("TouchLimits.max_tilt_rad must lie in (0, pi/2]")
+        if not (self.standoff_m > 0 and self.travel_m > 0 and self.candidates > 0):
+            raise InvalidArgument("TouchLimits: standoff, travel and candidates must be > 0")
+
+    @property
+    def depth_m(self) -> float:
+        """Length of an approach: the standoff and the travel beyond, metres."""
+        return self.standoff_m + self.travel_m
+
+
+@dataclass(frozen=True)
+class TouchPlan:
+    """A planned touch, data frame.
+
+    Attributes
+    ----------
+    point : (3,) float
+        The contact the most probable hypothesis predicts, metres.
+    direction : (3,) float
+        Unit approach direction (into the surface).
+    start : (3,) float
+        Where the approach starts, ``standoff`` outside ``point``, metres.
+    travel_m : float
+        How far the approach may go from ``start``, metres.
+    information_nats : float
+        The expected information gain's lower bound (module docstring).
+    depths_m : (H,) float
+        Predicted depth of contact from ``start`` under each hypothesis of the belief
+        (NaN: no contact within the travel), metres.
+    """
+
+    point: Array
+    direction: Array
+    start: Array
+    travel_m: float
+    information_nats: float
+    depths_m: Array
+
+
+def predicted_depths(
+    stack: FieldStack,
+    which: NDArray[np.int64],
+    poses: Array,
+    starts: Array,
+    directions: Array,
+    length_m: float,
+    step_m: float = 0.1e-3,
+) -> Array:
+    """Depth along each ray at which each posed model's surface is first met.
+
+    ``which`` (H,) fields of ``stack``, ``poses`` (H, 4, 4) T_model_from_data; rays
+    ``starts`` + s ``directions`` (C, 3), 0 <= s <= ``length_m``. Returns (H, C) depths
+    in metres (linear between samples ``step_m`` apart; 0 when the start is inside; NaN
+    when the ray meets nothing).
+    """
+    s = np.arange(0.0, length_m + step_m / 2, step_m)
+    rays = starts[:, None, :] + s[None, :, None] * directions[:, None, :]  # (C, S, 3)
+    out = np.full((len(poses), len(starts)), np.nan)
+    for h, (field, T) in enumerate(zip(which, poses, strict=True)):
+        X = rays.reshape(-1, 3) @ T[:3, :3].T + T[:3, 3]
+        values = stack(X.reshape(len(starts), len(s), 3), np.full(len(starts), field))
+        inside = values <= 0
+        hit = inside.any(axis=1)
+        first = np.argmax(inside, axis=1)
+        prev = np.maximum(first - 1, 0)
+        rows = np.arange(len(starts))
+        v0, v1 = values[rows, prev], values[rows, first]
+        frac = np.where(first > 0, v0 / np.maximum(v0 - v1, 1e-12), 0.0)
+        depth = (prev + np.clip(frac, 0.0, 1.0) * (first > 0)) * step_m
+        out[h] = np.where(hit, depth, np.nan)
+    return out
+
+
+def information_gain(depths: Array, weights: Array, sigma_m: float) -> Array:
+    """Lower bound of the expected information gain (nats) of each touch (module
+    docstring): ``depths`` (H, C) predicted per hypothesis (NaN: a miss), ``weights``
+    (H,) posteriors, ``sigma_m`` the touch's noise."""
+    d = np.where(np.isnan(depths), MISS_DEPTH_M, depths)
+    w = np.asarray(weights, float) / np.sum(weights)
+    gap = d[:, None, :] - d[None, :, :]  # (H, H, C)
+    mixture = np.einsum("j,ijc->ic", w, np.exp(-(gap**2) / (8.0 * sigma_m**2)))
+    return np.asarray(-(w @ np.log(mixture)), dtype=np.float64)
+
+
+def _candidates(
+    belief: Belief, models: Mapping[str, MeshModel], limits: TouchLimits, rng: np.random.Generator
+) -> tuple[Array, Array]:
+    """Candidate touch points (k, 3) and outward normals (k, 3), data frame: vertices of the
+    most probable hypotheses' models placed by their poses, within the limits."""
+    top = [h for h in belief.hypotheses[:4] if h.posterior >= 0.01] or list(belief.hypotheses[:1])
+    share = limits.candidates // len(top)
+    points, normals = [], []
+    for h in top:
+        model = models[h.model]
+        pick = rng.choice(len(model.vertices), size=min(share, len(model.vertices)), replace=False)
+        R, t = h.T_model_from_data[:3, :3], h.T_model_from_data[:3, 3]
+        points.append((model.vertices[pick] - t) @ R)  # R^T (v - t), row-wise
+        normals.append(model.normals[pick] @ R)
+    P, N = np.concatenate(points), np.concatenate(normals)
+    keep = N @ limits.up >= np.cos(limits.max_tilt_rad)
+    keep &= P @ limits.up >= limits.min_height_m
+    if keep.any():
+        near, _ = cKDTree(belief.points).query(P[keep])
+        keep[np.flatnonzero(keep)[near < limits.min_separation_m]] = False
+    return P[keep], N[keep]
+
+
+def _tool_clear(
+    stack: FieldStack,
+    field: int,
+    pose: Array,
+    starts: Array,
+    directions: Array,
+    depths: Array,
+    limits: TouchLimits,
+) -> NDArray[np.bool_]:
+    """Whether the sensor clears the posed model (``field``, T_model_from_data ``pose``)
+    on each approach: the tip all the way down ``up`` to the start, the shaft above the
+    tip at the predicted contact (``depths`` along ``directions`` from ``starts``)."""
+    heights = np.linspace(0.0, limits.tool_length_m, 48)
+    contact = starts + np.nan_to_num(depths, nan=0.0)[:, None] * directions
+    out = np.ones(len(starts), bool)
+    shaft_from = min(2 * limits.tip_radius_m, limits.tool_length_m)
+    for base, lowest, radius in (
+        (starts, 0.0, limits.tip_radius_m),
+        (contact, shaft_from, limits.tool_radius_m),
+    ):
+        h = heights[heights >= lowest]
+        X = base[:, None, :] + h[None, :, None] * limits.up
+        X = X.reshape(-1, 3) @ pose[:3, :3].T + pose[:3, 3]
+        values = stack(X.reshape(len(base), len(h), 3), np.full(len(base), field))
+        out &= values.min(axis=1) >= radius + limits.clearance_m
+    return out
+
+
+def _outcomes(belief: Belief) -> tuple[list[str], Array, Array]:
+    """The poses whose predicted contacts a touch should tell apart, with their weights:
+    each hypothesis, and where its pose is uncertain by more than ``SIGMA_FLOOR_M`` (a
+    slide along a nearly symmetric surface), its pose moved by +-``SIGMA_SCALE``
+    standard deviations along its two most uncertain motions (the rotation scaled by the
+    data's reach); the hypothesis's posterior split evenly among them. The most
+    probable hypothesis's own pose comes first."""
+    names: list[str] = []
+    poses: list[Array] = []
+    weights: list[float] = []
+    reach = max(float(np.max(np.linalg.norm(belief.points - belief.point, axis=1))), 1e-3)
+    scale = np.r_[np.full(3, reach), np.ones(3)]
+    for h in belief.hypotheses:
+        own = [h.T_model_from_data]
+        if h.posterior >= 0.001:
+            C = h.pose_covariance * np.outer(scale, scale)
+            values, vectors = np.linalg.eigh(0.5 * (C + C.T))
+            for k in (5, 4):
+                sd = float(np.sqrt(max(values[k], 0.0)))
+                if sd < SIGMA_FLOOR_M:
+                    break
+                motion = SIGMA_SCALE * sd * vectors[:, k] / scale
+                own += [h.moved(motion), h.moved(-motion)]
+        names += [h.model] * len(own)
+        poses += own
+        weights += [h.posterior / len(own)] * len(own)
+    return names, np.array(poses), np.array(weights)
+
+
+def plan_touch(
+    belief: Belief,
+    models: Mapping[str, MeshModel],
+    stack: FieldStack,
+    field_of: Mapping[str, int],
+    limits: TouchLimits,
+    *,
+    seed: int = 0,
+) -> TouchPlan | None:
+    """The touch of greatest expected information gain (module docstring), or None when
+    no candidate is allowed or none can tell the hypotheses apart.
+
+    ``stack`` holds the models' distance fields, ``field_of`` maps a model name to its
+    field in it. Same belief and seed, same plan.
+    """
+    if not belief.hypotheses:
+        return None
+    rng = np.random.default_rng(seed)
+    P, N = _candidates(belief, models, limits, rng)
+    if not len(P):
+        return None
+    directions = -N
+    starts = P - limits.standoff_m * directions
+    if limits.reachable is not None:
+        ok = np.asarray(limits.reachable(starts, directions), dtype=bool)
+        P, directions, starts = P[ok], directions[ok], starts[ok]
+        if not len(P):
+            return None
+    names, poses, weights = _outcomes(belief)
+    which = np.array([field_of[n] for n in names], dtype=np.int64)
+    depths = predicted_depths(stack, which, poses, starts, directions, limits.depth_m)
+    # the most probable hypothesis must meet its own surface at the candidate: no
+    # occluded approach, no grazing one
+    clear = np.abs(depths[0] - limits.standoff_m) <= 0.5e-3
+    if limits.tool_length_m > 0:
+        clear &= _tool_clear(stack, which[0], poses[0], starts, directions, depths[0], limits)
+    if not clear.any():
+        return None
+    sigma = float(np.hypot(belief.sensor_m, belief.noise.model_mismatch_m))
+    gain = np.where(clear, information_gain(depths, weights, sigma), -np.inf)
+    k = int(np.argmax(gain))
+    if not gain[k] > 1e-3:
+        return None
+    return TouchPlan(
+        P[k],
+        directions[k],
+        starts[k],
+        limits.depth_m,
+        float(gain[k]),
+        depths[:, k],
+    )

@@ -1,0 +1,164 @@
+"""The belief over (model, pose), touch planning and the verification loop."""
+
+import numpy as np
+import pytest
+from testing_meshes import blob, ellipsoid, sphere
+
+from recognition import (
+    InvalidArgument,
+    ModelDatabase,
+    NoiseModel,
+    TouchLimits,
+    verify,
+)
+from recognition.surfaces.mesh_model import MeshModel
+from recognition.surfaces.touch_planning import information_gain, predicted_depths
+from recognition.synthetic import mesh_data_curves, ray_contact
+
+
+@pytest.fixture(scope="module")
+def database():
+    scaled = ellipsoid()
+    scaled.apply_scale(1.04)
+    return ModelDatabase(
+        {
+            "blob": MeshModel("blob", blob()),
+            "ellipsoid": MeshModel("ellipsoid", ellipsoid()),
+            "larger_ellipsoid": MeshModel("larger_ellipsoid", scaled),
+            "sphere": MeshModel("sphere", sphere()),
+        }
+    ).prepare()
+
+
+def _curves(model, vertex, seed, noise=0.0, n_points=41, spacing_m=0.4e-3):
+    return mesh_data_curves(
+        model.mesh,
+        vertex,
+        normal=model.normals[vertex],
+        n_points=n_points,
+        spacing_m=spacing_m,
+        noise_std_m=noise,
+        rng=np.random.default_rng(seed),
+    )
+
+
+def _limits(synthetic):
+    return TouchLimits(up=-synthetic.curves.approach, max_tilt_rad=np.deg2rad(80.0))
+
+
+def test_distinct_data_give_one_sure_answer_with_posteriors_summing_to_one(database):
+    model = database["blob"]
+    synthetic = _curves(model, 2500, seed=1, noise=0.005e-3)
+    result = database.recognize(synthetic.curves)
+    assert result.name == "blob"
+    assert result.hypotheses[0].model == "blob"
+    assert result.confidence >= 0.99
+    assert sum(h.posterior for h in result.hypotheses) == pytest.approx(1.0)
+    np.testing.assert_allclose(result.hypotheses[0].location, synthetic.point_in_model, atol=0.1e-3)
+
+
+def test_a_sphere_leaves_p_free_so_the_answer_is_not_sure(database):
+    model = database["sphere"]
+    synthetic = _curves(model, 300, seed=2, noise=0.005e-3)
+    result = database.recognize(synthetic.curves, models=["sphere"])
+    assert result.name == "sphere"
+    # a turn about the centre moves p freely: the location is unknown far beyond 1 mm
+    assert np.sqrt(np.linalg.eigvalsh(result.hypotheses[0].location_covariance)).max() > 1e-3
+    assert result.confidence < 0.5
+
+
+def test_touches_tell_two_similar_models_apart(database):
+    model = database["ellipsoid"]
+    vertex = int(np.argmax(model.vertices[:, 2]))  # the top, where both ellipsoids look alike
+    synthetic = _curves(model, vertex, seed=3, noise=0.002e-3, n_points=11, spacing_m=0.3e-3)
+    result = database.recognize(
+        synthetic.curves,
+        models=["ellipsoid", "larger_ellipsoid"],
+        noise=NoiseModel(model_mismatch_m=0.02e-3),
+    )
+    assert result.confidence < 0.99
+    rng = np.random.default_rng(0)
+
+    def touch(plan):
+        return ray_contact(
+            model.distance,
+            synthetic.T_model_from_data,
+            plan.start,
+            plan.direction,
+            plan.travel_m,
+            noise_m=0.002e-3,
+            rng=rng,
+        )
+
+    done = verify(database, result.belief, touch, _limits(synthetic), max_touches=5)
+    assert done.belief.best.model == "ellipsoid"
+    assert done.belief.confidence >= 0.99
+    assert 1 <= len(done.steps) <= 5
+    assert done.stop == "sure"
+    # the ellipsoid's mirror images are the same answer
+    images = done.belief.best.location_images
+    assert len(images) > 1
+    assert np.linalg.norm(images - synthetic.point_in_model, axis=1).min() < 1e-3
+
+
+def test_a_sure_belief_makes_no_touch(database):
+    synthetic = _curves(database["blob"], 2500, seed=1, noise=0.005e-3)
+    result = database.recognize(synthetic.curves)
+
+    def touch(plan):
+        raise AssertionError("no touch expected")
+
+    done = verify(database, result.belief, touch, _limits(synthetic))
+    assert done.steps == () and done.stop == "sure"
+
+
+def test_a_gross_outlier_is_reported_and_does_not_change_the_answer(database):
+    synthetic = _curves(database["blob"], 2500, seed=4, noise=0.005e-3)
+    curves = [c.copy() for c in synthetic.curves.curves]
+    curves[1][5] += 0.02 * synthetic.curves.approach
+    moved = type(synthetic.curves)(tuple(curves), approach=synthetic.curves.approach)
+    result = database.recognize(moved)
+    assert result.hypotheses[0].model == "blob"
+    index = len(curves[0]) + 5
+    assert index in result.hypotheses[0].outliers
+    images = result.hypotheses[0].location_images  # the blob's symmetric images
+    assert np.linalg.norm(images - synthetic.point_in_model, axis=1).min() < 0.1e-3
+
+
+def test_information_gain_is_log_two_for_two_far_apart_outcomes_and_zero_for_one():
+    depths = np.array([[1e-3, 1e-3], [1e-3, 3e-3]])
+    gain = information_gain(depths, np.array([0.5, 0.5]), 1e-5)
+    np.testing.assert_allclose(gain, [0.0, np.log(2)], atol=1e-9)
+    # a predicted miss is an outcome of its own
+    miss = information_gain(np.array([[2e-3], [np.nan]]), np.array([0.5, 0.5]), 1e-5)
+    np.testing.assert_allclose(miss, [np.log(2)], atol=1e-9)
+
+
+def test_predicted_depth_along_a_ray_to_the_sphere_centre(database):
+    stack = database.field_stack
+    which = np.array([database.names.index("sphere")])
+    start = np.array([[0.0, 0.0, 0.035]])
+    depth = predicted_depths(stack, which, np.eye(4)[None], start, np.array([[0, 0, -1.0]]), 0.01)
+    assert depth[0, 0] == pytest.approx(0.005, abs=0.05e-3)
+    away = predicted_depths(stack, which, np.eye(4)[None], start, np.array([[0, 0, 1.0]]), 0.01)
+    assert np.isnan(away[0, 0])
+
+
+def test_ray_contact_meets_the_mesh_where_the_ray_does(database):
+    model = database["sphere"]
+    hit = ray_contact(model.distance, np.eye(4), [0.0, 0.0, 0.04], [0.0, 0.0, -1.0], 0.02)
+    assert np.linalg.norm(hit) == pytest.approx(0.03, abs=0.02e-3)
+    assert ray_contact(model.distance, np.eye(4), [0, 0, 0.04], [0, 0, 1.0], 0.02) is None
+
+
+def test_bad_arguments_are_refused_with_typed_errors(database):
+    synthetic = _curves(database["blob"], 2500, seed=1)
+    result = database.recognize(synthetic.curves)
+    with pytest.raises(InvalidArgument, match="max_touches"):
+        verify(database, result.belief, lambda plan: None, _limits(synthetic), max_touches=-1)
+    with pytest.raises(InvalidArgument, match="up"):
+        TouchLimits(up=np.zeros(3))
+    with pytest.raises(InvalidArgument, match="finite"):
+        database.update(result.belief, np.full((1, 3), np.nan))
+    with pytest.raises(InvalidArgument, match="model_mismatch_m"):
+        NoiseModel(model_mismatch_m=-1.0)
