@@ -4,6 +4,7 @@ python scripts/probe.py --object cat
 python scripts/probe.py --object snail --seed 3 --out runs/snail
 python scripts/probe.py --object cat --rerun serve --web-port 9090
 python scripts/probe.py --object cat --model-error-mm 0.1 --json runs/cat.json
+python scripts/probe.py --object fish --seed 1 --model-error-mm 0.1 --touches 5
 python scripts/probe.py --mesh my_scan.ply --units mm
 """
 
@@ -61,6 +62,23 @@ def show(s: dict[str, Any]) -> None:
             f"model error: the object lies {e['achieved_rms']:.3f} mm RMS from its model "
             f"(asked {e['requested_rms']:g} mm, correlation {e['correlation']:g} mm)"
         )
+    if "touches" in s:
+        t = s["touches"]
+        print(f"confidence after the sweeps: {s['confidence']:.3f}")
+        for k, made in enumerate(t["made"], 1):
+            met = "contact" if made["contact"] else "no contact"
+            print(
+                f"  touch {k}: {met}; best {made['best']}, confidence {made['confidence']:.3f} "
+                f"({made['recognition_time_s']:.2f} s planning and update)"
+            )
+        mark = "correct" if t["correct"] else "WRONG"
+        located = (
+            f", location error {t['location_error_mm']:.3f} mm" if "location_error_mm" in t else ""
+        )
+        print(
+            f"after {len(t['made'])} touches ({t['stop']}): {t['recognized']} ({mark}), "
+            f"confidence {t['confidence']:.3f}{located}"
+        )
     if s["outliers"]:
         print(f"outliers rejected: points {', '.join(map(str, s['outliers']))}")
     for message in s["truncated_sweeps"]:
@@ -68,8 +86,8 @@ def show(s: dict[str, Any]) -> None:
     t = s["timings_s"]
     print(
         f"timings: database {t['database']:.2f} s, probing {t['probing']:.2f} s (scene "
-        f"{t['scene_build']:.2f} s), recognition {t['recognition']:.2f} s, total "
-        f"{t['total']:.2f} s"
+        f"{t['scene_build']:.2f} s), recognition {t['recognition']:.2f} s, touches "
+        f"{t['touches']:.2f} s, total {t['total']:.2f} s"
     )
     print(f"curves: {s['curves_file']}")
     if s.get("recording"):
@@ -134,6 +152,13 @@ def parse_args(argv: list[str] | None = None) -> ProbeRunConfig:
         default=5.0,
         help="correlation length of that field, mm",
     )
+    p.add_argument(
+        "--touches",
+        type=integer(0),
+        default=5,
+        help="verification touches after the sweeps, at most, until the answer is sure "
+        "(confidence 0.99; default 5; 0: the three curves alone)",
+    )
     p.add_argument("--json", type=Path, default=None, help="also write the summary here")
     a = p.parse_args(argv)
     if (a.n_points - 1) * a.spacing_mm > MAX_CURVE_LENGTH_M * 1e3:
@@ -165,6 +190,7 @@ def parse_args(argv: list[str] | None = None) -> ProbeRunConfig:
         model_error_mm=a.model_error_mm,
         model_error_correlation_mm=a.model_error_correlation_mm,
         json_path=a.json,
+        touches=a.touches,
     )
     require_writable(p, "--out", config.out_dir, directory=True)
     require_writable(p, "--json", a.json)

@@ -45,6 +45,7 @@ CASES = [
     ("probe", "--plane-angle nan", "argument --plane-angle: expected a finite number"),
     ("probe", "--model-error-mm -0.1", "argument --model-error-mm: expected a finite number"),
     ("probe", "--model-error-correlation-mm 0", "argument --model-error-correlation-mm"),
+    ("probe", "--touches -1", "argument --touches: expected an integer >= 0, got -1"),
     ("probe", "--rerun live", "argument --rerun: invalid choice: 'live'"),
     ("probe", "--rerun serve --web-port 9100 --grpc-port 9100", "must differ, both are 9100"),
     ("probe", "--rerun serve --web-port 70000", "--web-port 70000: expected a port in 1-65535"),

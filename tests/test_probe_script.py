@@ -74,6 +74,27 @@ def test_a_model_error_is_probed_reported_and_written_to_the_summary(
     assert "model error: the object lies" in capsys.readouterr().out
 
 
+@pytest.mark.slow
+def test_touches_resolve_a_session_the_sweeps_leave_unsure(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    probe = load_script("probe")
+    args = ["--object", "fish", "--seed", "1", "--model-error-mm", "0.1", "--rerun", "off"]
+    summary = probe.run(probe.parse_args([*args, "--out", str(tmp_path)]))
+    # the three curves put p 1.6 mm off and are not sure of it; the touches are
+    assert summary["location_error_mm"] > 1.0 and summary["confidence"] < 0.99
+    touches = summary["touches"]
+    assert 1 <= len(touches["made"]) <= 5 and touches["stop"] == "sure"
+    assert touches["correct"] and touches["confidence"] >= 0.99
+    assert touches["location_error_mm"] < 0.5
+    out = capsys.readouterr().out
+    assert "confidence after the sweeps" in out and "touch 1: contact" in out
+    assert summary["timings_s"]["touches"] > 0
+    # --touches 0: the thesis's three curves alone
+    summary = probe.run(probe.parse_args([*args, "--out", str(tmp_path), "--touches", "0"]))
+    assert "touches" not in summary
+
+
 @pytest.mark.parametrize(
     "args",
     [

@@ -75,6 +75,11 @@ class ProbeRunConfig:
         Correlation length of that displacement, mm.
     json_path : Path or None
         Where to write the summary as JSON too (written atomically).
+    touches : int
+        Verification touches after the sweeps, at most
+        (:func:`~tactile_sim.probing.touches.touch_until_sure`): the robot touches where
+        the hypotheses disagree until the answer's confidence reaches 0.99. 0: the
+        thesis's three curves alone.
     """
 
     object_name: str = "cat"
@@ -93,6 +98,7 @@ class ProbeRunConfig:
     model_error_mm: float = 0.0
     model_error_correlation_mm: float = 5.0
     json_path: Path | None = None
+    touches: int = 5
 
     @property
     def out_dir(self) -> Path:
@@ -173,6 +179,14 @@ def probe_run(config: ProbeRunConfig) -> dict[str, Any]:
         registration = replace(registration, model_mismatch_m=displacement.rms_m)
     result = database.recognize(session.curves, registration)
     recognized = time.perf_counter()
+    touched = None
+    if config.touches > 0:
+        from tactile_sim.probing.touches import touch_until_sure
+
+        touched = touch_until_sure(
+            session, database, max_touches=config.touches, recognition=result
+        )
+    finished = time.perf_counter()
 
     truth = session.ground_truth
     T_object_from_world = np.linalg.inv(truth.T_world_from_object)
@@ -189,9 +203,11 @@ def probe_run(config: ProbeRunConfig) -> dict[str, Any]:
             "probing": probed - loaded,
             "scene_build": session.build_seconds,
             "recognition": recognized - probed,
-            "total": recognized - start,
+            "touches": finished - recognized,
+            "total": finished - start,
         },
         "outliers": [int(i) for i in result.outliers],
+        "confidence": result.confidence,
     }
     if config.model_error_mm > 0:
         summary["model_error_mm"] = {
@@ -209,6 +225,8 @@ def probe_run(config: ProbeRunConfig) -> dict[str, Any]:
         data = np.concatenate(session.curves.curves)
         angle, shift = pose_error(own.T_model_from_data, T_object_from_world, data)
         summary["pose_error_deg"], summary["pose_error_mm"] = angle, shift * 1e3
+    if touched is not None:
+        summary["touches"] = _touch_summary(touched, name, truth.data_point_in_object)
 
     out = config.out_dir
     out.mkdir(parents=True, exist_ok=True)
@@ -224,6 +242,35 @@ def probe_run(config: ProbeRunConfig) -> dict[str, Any]:
     if config.json_path is not None:
         write_json_atomic(Path(config.json_path), summary)
     return summary
+
+
+def _touch_summary(touched: Any, name: str, point_in_object: np.ndarray) -> dict[str, Any]:
+    """JSON-ready: each touch's confidence and best model, the answer after the touches
+    (its model, confidence, location error on the object when it names it) and times."""
+    belief = touched.verification.belief
+    best = belief.best
+    out: dict[str, Any] = {
+        "made": [
+            {
+                "confidence": t.confidence,
+                "best": t.best_model,
+                "contact": t.point_in_world is not None,
+                "recognition_time_s": t.recognition_time_s,
+                "robot_time_s": t.robot_time_s,
+            }
+            for t in touched.touches
+        ],
+        "stop": touched.verification.stop,
+        "recognized": None if best is None else best.model,
+        "correct": best is not None and best.model == name,
+        "confidence": belief.confidence,
+    }
+    if best is not None and best.model == name:
+        images = best.location_images if len(best.location_images) else best.location[None]
+        out["location_error_mm"] = float(
+            np.linalg.norm(images - point_in_object, axis=1).min() * 1e3
+        )
+    return out
 
 
 def _target(config: ProbeRunConfig) -> tuple[ProbeTarget, MeshReport | None]:

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -135,6 +135,9 @@ class ProbeSession:
     trajectory : Trajectory or None
         The rig's state sampled during the session (``probe_object(..., trajectory_hz=...)``);
         None when it was not recorded.
+    runner : SweepRunner or None
+        The rig, still in the scene where the sweeps left it: further touches
+        (:func:`tactile_sim.probing.touches.touch_until_sure`) continue from there.
     """
 
     object_name: str
@@ -149,6 +152,7 @@ class ProbeSession:
     build_seconds: float
     sim_seconds: float
     trajectory: Trajectory | None = None
+    runner: SweepRunner | None = field(default=None, repr=False, compare=False)
 
     @property
     def truncated(self) -> bool:
@@ -359,4 +363,5 @@ def probe_object(
         build_seconds=build_seconds,
         sim_seconds=float(probe_scene.physics.data.time),
         trajectory=None if recorder is None else recorder.trajectory(),
+        runner=runner,
     )

@@ -195,7 +195,7 @@ class SweepRunner:
         self.highest_z = -math.inf
         self.truth = GroundTruthReader(rig.physics)
 
-    def _sample(self, estimate: ContactEstimate) -> Sample:
+    def sample(self, estimate: ContactEstimate) -> Sample:
         """The sample of an estimate just sensed, with the slide of its press and the truth."""
         truth = self.truth.read()
         self.highest_z = max(self.highest_z, float(estimate.tip_centre_in_world[2]))
@@ -232,7 +232,7 @@ class SweepRunner:
                 f"point {np.round(plane.origin_in_world, 4).tolist()} m (the tip centre was "
                 f"to touch at {np.round(line_point, 4).tolist()} m)"
             )
-        return self._sample(estimate)
+        return self.sample(estimate)
 
     def side(
         self, plane: SamplingPlane, history: list[Sample], direction: int, count: int
@@ -284,7 +284,7 @@ class SweepRunner:
                     f"{'+' if direction > 0 else '-'} side: no surface within "
                     f"{config.search_m * 1e3:.1f} mm beyond the predicted point (an edge)",
                 )
-            sample = self._sample(estimate)
+            sample = self.sample(estimate)
             new_up = _in_plane(estimate.normal_in_world, plane)
             if new_up is None:
                 new_up = predicted_up

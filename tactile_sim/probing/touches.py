@@ -1,0 +1,225 @@
+"""Verification touches by the robot after the three sweeps (active touch).
+
+:func:`touch_until_sure` recognises the session's curves, then runs
+:func:`recognition.verify` with the rig itself as the touch: for each planned touch the
+arm retreats to its travel height, moves over the approach's start, comes down to it and
+makes one guarded approach along the planned direction
+(:meth:`tactile_sim.probing.rig.Rig.approach`); the sensed contact point (or nothing
+within the travel) updates every hypothesis. Touches are planned on the object's free
+surface within the stylus's tilt limit, clear of the table, and where the arm reaches
+both ends of the approach.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from recognition import (
+    BeliefConfig,
+    ModelDatabase,
+    NoiseModel,
+    Recognition,
+    RegistrationConfig,
+    TouchLimits,
+    TouchPlan,
+    Verification,
+    verify,
+)
+from tactile_sim.errors import SimulationError, UnreachablePoint
+from tactile_sim.kinematics import COBRA600, inverse_kinematics
+from tactile_sim.probing.session import ProbeSession
+
+__all__ = ["TouchRecord", "TouchSession", "touch_limits", "touch_until_sure"]
+
+Array = NDArray[np.float64]
+
+#: Touches stay this far above the table top (world z = 0), metres.
+TABLE_CLEARANCE_M = 5.0e-3
+#: Largest tilt of a touched surface from vertical, degrees (within the sweeps' limit).
+TOUCH_TILT_DEG = 60.0
+#: The stylus shaft's collision radius (``scenes/joystick_probe.xml``), metres ...
+STYLUS_RADIUS_M = 0.8e-3
+#: ... checked for clearance this far above the tip (the housing sits higher than any
+#: catalog object), metres.
+STYLUS_CHECK_LENGTH_M = 0.1
+
+
+@dataclass(frozen=True)
+class TouchRecord:
+    """One verification touch of the robot (world frame, metres).
+
+    Attributes
+    ----------
+    plan : TouchPlan
+    point_in_world : (3,) float or None
+        Sensed contact point (None: nothing met within the travel).
+    normal_in_world : (3,) float or None
+        Sensed outward normal.
+    true_contact_in_world : (3,) float or None
+        Ground truth: where MuJoCo's contact met the object (None without a contact).
+    confidence : float
+        Confidence after the update.
+    best_model : str or None
+    recognition_time_s : float
+        Planning and updating, seconds.
+    robot_time_s : float
+        Wall time of the motion and the approach, seconds.
+    """
+
+    plan: TouchPlan
+    point_in_world: Array | None
+    normal_in_world: Array | None
+    true_contact_in_world: Array | None
+    confidence: float
+    best_model: str | None
+    recognition_time_s: float
+    robot_time_s: float
+
+
+@dataclass(frozen=True)
+class TouchSession:
+    """The recognition after the sweeps and the verification touches that followed.
+
+    Attributes
+    ----------
+    recognition : Recognition
+        From the three curves alone.
+    verification : Verification
+        The belief after the touches (``verification.belief``) and why they stopped.
+    touches : tuple of TouchRecord
+    wall_seconds : float
+        Recognition, planning, updates and robot motion, seconds.
+    """
+
+    recognition: Recognition
+    verification: Verification
+    touches: tuple[TouchRecord, ...]
+    wall_seconds: float
+
+
+def touch_limits(session: ProbeSession) -> TouchLimits:
+    """The touches the session's robot can make: world frame (the curves' frame), the
+    stylus's tilt limit, clear of the table, both ends of the approach reachable."""
+    robot = session.runner.rig.sensor.robot if session.runner is not None else None
+
+    def reachable(starts: Array, directions: Array) -> NDArray[np.bool_]:
+        ok = np.ones(len(starts), bool)
+        for k, (start, direction) in enumerate(zip(starts, directions, strict=True)):
+            try:
+                for point in (start, start + limits.depth_m * direction):
+                    if robot is None:
+                        inverse_kinematics(point)
+                    else:
+                        inverse_kinematics(point, robot=robot)
+            except UnreachablePoint:
+                ok[k] = False
+        return ok
+
+    probe = (robot or COBRA600).probe
+    limits = TouchLimits(
+        up=np.array([0.0, 0.0, 1.0]),
+        max_tilt_rad=math.radians(TOUCH_TILT_DEG),
+        min_height_m=TABLE_CLEARANCE_M,
+        reachable=reachable,
+        tip_radius_m=probe.tip_radius_m,
+        tool_radius_m=STYLUS_RADIUS_M,
+        tool_length_m=STYLUS_CHECK_LENGTH_M,
+    )
+    return limits
+
+
+def touch_until_sure(
+    session: ProbeSession,
+    database: ModelDatabase,
+    *,
+    max_touches: int = 5,
+    confidence: float = 0.99,
+    registration: RegistrationConfig | None = None,
+    noise: NoiseModel | None = None,
+    belief: BeliefConfig | None = None,
+    recognition: Recognition | None = None,
+) -> TouchSession:
+    """Recognise the session's curves, then touch until sure (module docstring).
+
+    Parameters
+    ----------
+    session : ProbeSession
+        Fresh from :func:`probe_object` (its rig continues).
+    database : ModelDatabase
+    max_touches : int
+        At most this many touches (0: the thesis's three curves alone).
+    confidence : float
+        Stop once the best hypothesis's posterior reaches this.
+    registration, noise, belief
+        Passed to :meth:`ModelDatabase.recognize`.
+    recognition : Recognition, optional
+        The curves' recognition when already made.
+
+    Raises
+    ------
+    SimulationError
+        The session's rig is gone (a session rebuilt from files), or MuJoCo became
+        unstable.
+    """
+    start = time.perf_counter()
+    runner = session.runner
+    if runner is None and max_touches > 0:
+        raise SimulationError("the session's rig is gone: touches need a fresh probe_object")
+    if recognition is None:
+        recognition = database.recognize(session.curves, registration, noise=noise, belief=belief)
+    assert recognition.belief is not None  # mesh databases give a belief
+    records: list[TouchRecord] = []
+    made: list[tuple[Array | None, Array | None, Array | None, float]] = []
+
+    def touch(plan: TouchPlan) -> Array | None:
+        assert runner is not None
+        began = time.perf_counter()
+        runner.retreat()
+        runner.travel_to(plan.start)
+        estimate = runner.rig.approach(plan.start, plan.direction, plan.travel_m)
+        if estimate is None:
+            made.append((None, None, None, time.perf_counter() - began))
+            return None
+        sample = runner.sample(estimate)
+        touched = sample.touched if np.all(np.isfinite(sample.touched)) else None
+        # The contact lies a tip radius from the sensed centre along the surface normal;
+        # the approach runs along the normal the hypotheses predict, which a single
+        # reading's force direction estimates less well (friction tilts it): the point a
+        # radius ahead of the centre along the approach is off the surface by only
+        # r (1 - cos) of the angle between them.
+        radius = runner.rig.sensor.robot.probe.tip_radius_m
+        point = estimate.tip_centre_in_world + radius * plan.direction
+        made.append((point, estimate.normal_in_world, touched, time.perf_counter() - began))
+        return point
+
+    limits = touch_limits(session)
+    verification = verify(
+        database,
+        recognition.belief,
+        touch,
+        limits,
+        max_touches=max_touches,
+        confidence=confidence,
+        seed=session.seed,
+    )
+    if runner is not None and made:
+        runner.retreat()
+    for step, (point, normal, truth, seconds) in zip(verification.steps, made, strict=True):
+        records.append(
+            TouchRecord(
+                step.plan,
+                point,
+                normal,
+                truth,
+                step.confidence,
+                step.best_model,
+                step.recognition_time_s,
+                seconds,
+            )
+        )
+    return TouchSession(recognition, verification, tuple(records), time.perf_counter() - start)
