@@ -104,6 +104,14 @@ def parse_args(argv: list[str] | None = None) -> BenchmarkConfig:
         help="instances run in thesis mode (0: all)",
     )
     p.add_argument(
+        "--touches",
+        type=integer(0),
+        default=defaults.methods.touches,
+        help="verification touches after the curves, at most, until the answer's "
+        "confidence reaches 0.99 (fast mode; synthetic: ray casts on the true model, sim: "
+        "the robot; default 0)",
+    )
+    p.add_argument(
         "--workers",
         type=integer(1),
         default=defaults.run.workers,
@@ -212,6 +220,7 @@ def parse_args(argv: list[str] | None = None) -> BenchmarkConfig:
             delta_per_mm=a.delta,
             thesis_instances=a.thesis_instances,
             model_mismatch_mm=model_error_mm,
+            touches=a.touches,
         ),
         meshes=MeshSettings(
             mesh_dir=a.mesh_dir, units=given("units", "m"), with_catalog=a.with_catalog

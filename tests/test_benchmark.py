@@ -267,7 +267,12 @@ def test_records_read_back_as_written(uninterrupted: list[bench.Record], tmp_pat
     assert [r.dumps() for r in again] == path.read_text().splitlines()
     first = json.loads(path.read_text().splitlines()[0])
     assert list(first)[:5] == ["instance", "model", "index", "vertex", "seed"]
-    assert list(first)[-2:] == ["localization_error_mm", "settings"]
+    assert list(first)[-4:] == [
+        "localization_error_mm",
+        "confidence",
+        "answer_error_mm",
+        "settings",
+    ]
 
 
 def test_instance_facts_and_errors_are_kept_apart() -> None:
@@ -511,3 +516,23 @@ def test_sampling_planes_that_coincide_are_refused_before_any_instance(
     assert script.main(argv) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "sampling planes 0 and 2 coincide" in err
+
+
+def test_touching_jobs_record_their_touches_under_their_own_settings(
+    database_dir: Path, jobs: list[bench.Job], tmp_path: Path
+) -> None:
+    touching = [bench.Job(j.spec, j.source, j.configs, touches=2) for j in jobs[:4]]
+    path = tmp_path / "records.jsonl"
+    records = bench.run(database_dir, touching, path, progress=False)
+    assert len(records) == 4
+    assert {r.settings for r in records}.isdisjoint({j.settings(FastConfig()) for j in jobs})
+    for record in records:
+        assert record.confidence is not None and 0.0 <= record.confidence <= 1.0
+        touches = record.touches
+        assert touches is not None and 0 <= touches["made"] <= 2
+        assert len(touches["recognition_times_s"]) == touches["made"]
+        # a sure answer after the curves makes no touch
+        if record.confidence >= 0.99:
+            assert touches["made"] == 0 and touches["stop"] == "sure"
+    # resumed, not redone: the same records read back
+    assert bench.run(database_dir, touching, path, progress=False) == records

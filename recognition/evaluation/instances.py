@@ -15,15 +15,18 @@ the simulated robot probe the objects (Section 4.4).
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 from numpy.typing import NDArray
 
 from recognition.evaluation.models import Database
 from recognition.surfaces.data_curves import DataCurves
+
+if TYPE_CHECKING:
+    from recognition.surfaces.touch_planning import TouchLimits, TouchPlan
 
 __all__ = ["Instance", "InstanceSource", "InstanceSpec"]
 
@@ -72,12 +75,20 @@ class Instance:
     reference_curves : DataCurves or None
         The same instance without measurement error (e.g. the simulator's true contact
         points); recognised too, as a diagnosis, when given.
+    touch : callable or None
+        ``touch(plan) -> contact point (3,) in the curves' frame, or None`` (nothing met
+        along the planned approach): further contact for verification touches
+        (:func:`recognition.verify`); None: the source cannot touch.
+    touch_limits : TouchLimits or None
+        The touches ``touch`` can make.
     """
 
     curves: DataCurves | None
     point_in_model: NDArray[np.float64] | None = None
     info: Mapping[str, Any] = field(default_factory=dict)
     reference_curves: DataCurves | None = None
+    touch: Callable[[TouchPlan], NDArray[np.float64] | None] | None = None
+    touch_limits: TouchLimits | None = None
 
 
 class InstanceSource(Protocol):

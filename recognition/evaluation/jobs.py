@@ -12,10 +12,12 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from recognition.errors import DegenerateGeometry, InvalidCurveData, InvalidModel
-from recognition.evaluation.instances import InstanceSource, InstanceSpec
+from recognition.evaluation.instances import Instance, InstanceSource, InstanceSpec
 from recognition.evaluation.models import Database
 from recognition.evaluation.records import Record, ReferenceRecord
 from recognition.evaluation.synthetic_source import SyntheticSource
+from recognition.surfaces.active_touch import verify
+from recognition.surfaces.belief import Belief
 from recognition.surfaces.data_curves import DataCurves
 from recognition.surfaces.database import ModelDatabase
 from recognition.surfaces.registration import (
@@ -39,11 +41,15 @@ class Job:
         Makes the instance from ``spec`` (a frozen dataclass).
     configs : tuple of RegistrationConfig
         One per method (the config's class names it), each method at most once.
+    touches : int
+        Verification touches after the curves, at most (fast mode, sources that can
+        touch; :func:`recognition.verify`); 0: none.
     """
 
     spec: InstanceSpec
     source: InstanceSource
     configs: tuple[RegistrationConfig, ...]
+    touches: int = 0
 
     def __post_init__(self) -> None:
         if len(set(self.methods)) != len(self.methods):
@@ -55,8 +61,8 @@ class Job:
         return tuple(c.mode.value for c in self.configs)
 
     def settings(self, config: RegistrationConfig) -> str:
-        """The settings key of the records made with ``config``."""
-        return settings_key(self.source, config)
+        """The settings key of the records made with ``config`` (and the touches)."""
+        return settings_key(self.source, config, ("touches", self.touches) if self.touches else ())
 
 
 def _source_payload(source: Any) -> dict[str, Any]:
@@ -107,6 +113,58 @@ class _Recognised:
     k2: float | None = None
     error: str | None = None
     location: NDArray[np.float64] | None = None
+    result: Recognition | None = None
+
+
+def _answer_error_mm(
+    belief: Belief | None, true_model: str, point_in_model: NDArray[np.float64] | None
+) -> float | None:
+    """How far the belief's best hypothesis puts p from the truth, mm, up to the model's
+    symmetries (None: it names another model, or no truth)."""
+    best = None if belief is None else belief.best
+    if best is None or best.model != true_model or point_in_model is None:
+        return None
+    images = best.location_images if len(best.location_images) else best.location[None]
+    return float(np.linalg.norm(images - point_in_model, axis=1).min() * 1e3)
+
+
+def _touched(
+    database: Database,
+    result: Recognition | None,
+    instance: Instance,
+    true_model: str,
+    touches: int,
+    seed: int,
+) -> dict[str, Any] | None:
+    """The verification touches' record (None when none can be made)."""
+    if (
+        touches <= 0
+        or result is None
+        or result.belief is None
+        or instance.touch is None
+        or instance.touch_limits is None
+        or not isinstance(database, ModelDatabase)
+    ):
+        return None
+    done = verify(
+        database,
+        result.belief,
+        instance.touch,
+        instance.touch_limits,
+        max_touches=touches,
+        seed=seed,
+    )
+    best = done.belief.best
+    return {
+        "made": len(done.steps),
+        "stop": done.stop,
+        "recognized": None if best is None else best.model,
+        "success": best is not None and best.model == true_model,
+        "confidence": done.belief.confidence,
+        "answer_error_mm": _answer_error_mm(done.belief, true_model, instance.point_in_model),
+        "confidences": [step.confidence for step in done.steps],
+        "recognition_times_s": [step.recognition_time_s for step in done.steps],
+    }
 
 
 def _recognize(
@@ -139,6 +197,7 @@ def _recognize(
         k1=float(result.geometry.k1),
         k2=float(result.geometry.k2),
         location=location,
+        result=result,
     )
 
 
@@ -187,6 +246,7 @@ def run_job(database: Database, job: Job) -> list[Record]:
             )
             continue
         found = _recognize(database, instance.curves, spec.model, config)
+        belief = None if found.result is None else found.result.belief
         reference = None
         if instance.reference_curves is not None:
             ref = _recognize(database, instance.reference_curves, spec.model, config)
@@ -212,6 +272,11 @@ def run_job(database: Database, job: Job) -> list[Record]:
                 error=found.error,
                 localization_error_mm=_located_error_mm(found.location, instance.point_in_model),
                 reference=reference,
+                confidence=None if belief is None else belief.confidence,
+                answer_error_mm=_answer_error_mm(belief, spec.model, instance.point_in_model),
+                touches=_touched(
+                    database, found.result, instance, spec.model, job.touches, spec.seed
+                ),
             )
         )
     return records

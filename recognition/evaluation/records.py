@@ -5,7 +5,8 @@ A :class:`Record` is written as one JSON object per line, its keys in this order
 the instance (:attr:`Record.info`, e.g. ``probe_time_s``; a failed instance's ``error``),
 then ``instance_time_s``, ``method``, ``recognized``, ``success``, ``time_s``,
 ``errors_mm``, ``times_s`` and, when known, ``candidates``, ``k1``, ``k2``, ``error``
-(the recognition failed), ``localization_error_mm``, ``reference`` and ``settings``.
+(the recognition failed), ``localization_error_mm``, ``reference``, ``confidence`` and
+``answer_error_mm``, ``touches`` and ``settings``.
 Reading a line back (:meth:`Record.from_json`) takes the keys between ``seed`` and
 ``instance_time_s`` as the source's facts.
 """
@@ -138,6 +139,16 @@ class Record:
         Distance of the true model's estimate of p from the true p, mm.
     reference : ReferenceRecord or None
         The recognition of the instance's reference curves, when it has them.
+    confidence : float or None
+        Fast mode: the belief's confidence that its best hypothesis is right
+        (:attr:`recognition.Recognition.confidence`), after the curves.
+    answer_error_mm : float or None
+        Distance of the best hypothesis's p from the true p, mm (up to the model's
+        symmetries), when it names the true model.
+    touches : mapping or None
+        Verification touches (``--touches N``): ``made`` (count), ``stop``,
+        ``recognized``, ``success``, ``confidence``, ``answer_error_mm`` after them,
+        ``recognition_times_s`` (planning and update of each touch).
     settings : str or None
         Hash of the source and registration settings (set by the runner).
     """
@@ -162,6 +173,17 @@ class Record:
     localization_error_mm: float | None = None
     reference: ReferenceRecord | None = None
     settings: str | None = None
+    confidence: float | None = None
+    answer_error_mm: float | None = None
+    touches: Mapping[str, Any] | None = None
+
+    def answered_right(self, after_touches: bool = False, radius_mm: float = 1.0) -> bool:
+        """The belief's answer names the true model and puts p within ``radius_mm`` of
+        the truth (after the verification touches, when made and asked for)."""
+        if after_touches and self.touches is not None:
+            error = self.touches.get("answer_error_mm")
+            return bool(self.touches.get("success")) and error is not None and error <= radius_mm
+        return self.answer_error_mm is not None and self.answer_error_mm <= radius_mm
 
     def to_json(self) -> dict[str, Any]:
         """The record's JSON object (keys in the order of the module docstring)."""
@@ -191,6 +213,11 @@ class Record:
         out["localization_error_mm"] = self.localization_error_mm
         if self.reference is not None:
             out["reference"] = self.reference.to_json()
+        if self.confidence is not None:
+            out["confidence"] = self.confidence
+            out["answer_error_mm"] = self.answer_error_mm
+        if self.touches is not None:
+            out["touches"] = dict(self.touches)
         if self.settings is not None:
             out["settings"] = self.settings
         return out
@@ -220,6 +247,9 @@ class Record:
             localization_error_mm=payload["localization_error_mm"],
             reference=None if reference is None else ReferenceRecord.from_json(reference),
             settings=payload.get("settings"),
+            confidence=payload.get("confidence"),
+            answer_error_mm=payload.get("answer_error_mm"),
+            touches=None if payload.get("touches") is None else dict(payload["touches"]),
         )
 
     def with_settings(self, settings: str) -> Record:

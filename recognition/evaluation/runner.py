@@ -43,7 +43,7 @@ def _todo(jobs: Sequence[Job], done: set[tuple[str, str, str | None]]) -> tuple[
         )
         total += len(job.configs)
         if missing:
-            todo.append(Job(job.spec, job.source, missing))
+            todo.append(Job(job.spec, job.source, missing, job.touches))
     return todo, total
 
 

@@ -6,11 +6,18 @@ import hashlib
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import NDArray
 
 from recognition.errors import InvalidCurveData, RecognitionError
 from recognition.evaluation.instances import Instance, InstanceSpec
 from recognition.surfaces.database import ModelDatabase
-from recognition.synthetic import SyntheticCurves, mesh_data_curves, sampling_plane_normals
+from recognition.surfaces.touch_planning import TouchLimits, TouchPlan
+from recognition.synthetic import (
+    SyntheticCurves,
+    mesh_data_curves,
+    ray_contact,
+    sampling_plane_normals,
+)
 
 __all__ = ["SyntheticSource", "instance_specs", "make_curves"]
 
@@ -69,9 +76,33 @@ class SyntheticSource:
         return instance_specs(database, self)
 
     def instance(self, database: ModelDatabase, spec: InstanceSpec) -> Instance:
-        """The sampled curves (noisy, moved) and p on the model."""
+        """The sampled curves (noisy, moved) and p on the model; a touch is a ray cast
+        along the planned approach onto the true model at the true pose, with the same
+        noise (:func:`~recognition.synthetic.ray_contact`), approaching within 80 degrees
+        of the curves' approach direction."""
         synthetic = make_curves(database, spec, self)
-        return Instance(synthetic.curves, np.asarray(synthetic.point_in_model))
+        model = database[spec.model]
+        rng = _rng("touches", spec.key, spec.seed)
+
+        def touch(plan: TouchPlan) -> NDArray[np.float64] | None:
+            return ray_contact(
+                model.distance,
+                synthetic.T_model_from_data,
+                plan.start,
+                plan.direction,
+                plan.travel_m,
+                noise_m=self.noise_std_m,
+                rng=rng,
+            )
+
+        assert synthetic.curves.approach is not None  # sampled curves carry it
+        limits = TouchLimits(up=-synthetic.curves.approach, max_tilt_rad=np.deg2rad(80.0))
+        return Instance(
+            synthetic.curves,
+            np.asarray(synthetic.point_in_model),
+            touch=touch,
+            touch_limits=limits,
+        )
 
 
 def _rng(*key: object) -> np.random.Generator:

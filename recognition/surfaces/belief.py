@@ -21,7 +21,8 @@ made the true model of a mismatched object look thousands of log-units worse tha
 is. Each residual is clipped at ``outlier_sigmas`` effective noise levels (a gross outlier
 counts alike under every hypothesis, and is reported). With a uniform prior over the
 hypotheses, the posterior of h is proportional to exp(-r_h^T Sigma^-1 r_h / 2),
-normalised over all hypotheses of all models.
+normalised over all hypotheses of all models and the alternative that none of them is
+right (:attr:`BeliefConfig.unexplained_p`: a search can miss the truth).
 
 Each hypothesis also carries the uncertainty of its pose (Laplace: the inverse of
 J^T Sigma^-1 J, J the point-to-plane Jacobian of the residuals, with a weak prior) and so
@@ -38,6 +39,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import cho_factor, cho_solve, solve_triangular
+from scipy.special import gammaincinv
 
 from recognition.errors import InvalidArgument
 from recognition.rigid import cross, pose_matrix, rotation_from_vector
@@ -147,6 +149,11 @@ class BeliefConfig:
         slid pose pulls it back, a gross outlier does not pull.
     min_posterior : float
         Hypotheses whose posterior falls below this are dropped after an update.
+    unexplained_p : float
+        The alternative "none of these" is as likely as a hypothesis whose whitened
+        residuals reach the (1 - ``unexplained_p``) quantile of their chi-square law: the
+        rate at which the true hypothesis is doubted. When the search missed the truth,
+        the data soon fit no hypothesis that well and the confidence falls.
     radius_m : float
         An answer is right when it names the right model and puts p within this of the
         truth (the confidence's sense), metres.
@@ -164,6 +171,7 @@ class BeliefConfig:
     refine_iterations: int = 4
     refine_clip_m: float = 2.0e-3
     min_posterior: float = 1e-9
+    unexplained_p: float = 1e-3
     radius_m: float = 1.0e-3
     explore_hypotheses: int = 3
     explore_log_gap: float = 10.0
@@ -243,6 +251,8 @@ class Belief:
     noise : NoiseModel
     config : BeliefConfig
     misses : tuple of (start (3,), direction (3,), travel) per touch that met nothing
+    unexplained : float
+        Posterior that none of the hypotheses is the truth (module docstring).
     """
 
     hypotheses: tuple[Hypothesis, ...]
@@ -253,6 +263,7 @@ class Belief:
     noise: NoiseModel = NoiseModel()
     config: BeliefConfig = BeliefConfig()
     misses: tuple[tuple[Array, Array, float], ...] = ()
+    unexplained: float = 0.0
 
     @property
     def best(self) -> Hypothesis | None:
@@ -367,8 +378,15 @@ class Belief:
         found += self._fitted(self._explored(found), models, factor)
         found = _merged(found, self.point)
         logs = np.array([h.log_likelihood for h in found])
-        weights = np.exp(logs - logs.max())
-        weights /= weights.sum()
+        # "none of these": as likely as a fit whose whitened residuals sit at the
+        # (1 - unexplained_p) quantile of their chi-square law (n - 6 degrees of freedom)
+        dof = max(len(self.points) - 6, 1)
+        other = -float(gammaincinv(dof / 2.0, 1.0 - config.unexplained_p))
+        top = max(float(logs.max()), other)
+        weights = np.exp(logs - top)
+        total = weights.sum() + np.exp(other - top)
+        weights /= total
+        unexplained = float(np.exp(other - top) / total)
         order = np.argsort(-weights, kind="stable")[: config.max_hypotheses]
         kept = tuple(
             replace(found[i], posterior=float(weights[i]))
@@ -384,6 +402,7 @@ class Belief:
             self.noise,
             config,
             self.misses,
+            unexplained,
         )
 
     def _fitted(

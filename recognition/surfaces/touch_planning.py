@@ -38,6 +38,8 @@ Array = NDArray[np.float64]
 
 #: A predicted miss counts as a contact this far beyond the travel, metres.
 MISS_DEPTH_M = 1.0
+#: Hypotheses less probable than this are left out of a touch's outcomes.
+MIN_OUTCOME_WEIGHT = 1e-4
 #: A pose uncertain by more than this along a motion (metres at the data's reach) is
 #: also represented by poses moved along it ...
 SIGMA_FLOOR_M = 0.1e-3
@@ -66,6 +68,8 @@ class TouchLimits:
         Least distance of a touch from contact already made.
     candidates : int
         Candidate touches drawn (split over the most probable hypotheses).
+    scored : int
+        Of the allowed ones, at most this many (drawn) are scored.
     reachable : callable or None
         ``reachable(starts (k, 3), directions (k, 3)) -> (k,) bool``: whether the robot
         can start there and move so (workspace, joint limits); None: everywhere.
@@ -85,6 +89,7 @@ class TouchLimits:
     travel_m: float = 6.0e-3
     min_separation_m: float = 3.0e-3
     candidates: int = 1200
+    scored: int = 300
     reachable: Callable[[Array, Array], NDArray[np.bool_]] | None = None
     tip_radius_m: float = 0.0
     tool_radius_m: float = 0.0
@@ -123,9 +128,10 @@ class TouchPlan:
         How far the approach may go from ``start``, metres.
     information_nats : float
         The expected information gain's lower bound (module docstring).
-    depths_m : (H,) float
-        Predicted depth of contact from ``start`` under each hypothesis of the belief
-        (NaN: no contact within the travel), metres.
+    depths_m : (K,) float
+        Predicted depth of contact from ``start`` under each pose the touch was to tell
+        apart (the hypotheses, with poses moved along their uncertain motions; NaN: no
+        contact within the travel), metres.
     """
 
     point: Array
@@ -245,6 +251,8 @@ def _outcomes(belief: Belief) -> tuple[list[str], Array, Array]:
     reach = max(float(np.max(np.linalg.norm(belief.points - belief.point, axis=1))), 1e-3)
     scale = np.r_[np.full(3, reach), np.ones(3)]
     for h in belief.hypotheses:
+        if h.posterior < MIN_OUTCOME_WEIGHT and poses:
+            continue
         own = [h.T_model_from_data]
         if h.posterior >= 0.001:
             C = h.pose_covariance * np.outer(scale, scale)
@@ -291,16 +299,21 @@ def plan_touch(
             return None
     names, poses, weights = _outcomes(belief)
     which = np.array([field_of[n] for n in names], dtype=np.int64)
-    depths = predicted_depths(stack, which, poses, starts, directions, limits.depth_m)
     # the most probable hypothesis must meet its own surface at the candidate: no
     # occluded approach, no grazing one
-    clear = np.abs(depths[0] - limits.standoff_m) <= 0.5e-3
+    own = predicted_depths(stack, which[:1], poses[:1], starts, directions, limits.depth_m)[0]
+    clear = np.abs(own - limits.standoff_m) <= 0.5e-3
     if limits.tool_length_m > 0:
-        clear &= _tool_clear(stack, which[0], poses[0], starts, directions, depths[0], limits)
-    if not clear.any():
+        clear &= _tool_clear(stack, which[0], poses[0], starts, directions, own, limits)
+    keep = np.flatnonzero(clear)
+    if not keep.size:
         return None
+    if keep.size > limits.scored:
+        keep = np.sort(rng.choice(keep, size=limits.scored, replace=False))
+    P, directions, starts = P[keep], directions[keep], starts[keep]
+    depths = predicted_depths(stack, which, poses, starts, directions, limits.depth_m)
     sigma = float(np.hypot(belief.sensor_m, belief.noise.model_mismatch_m))
-    gain = np.where(clear, information_gain(depths, weights, sigma), -np.inf)
+    gain = information_gain(depths, weights, sigma)
     k = int(np.argmax(gain))
     if not gain[k] > 1e-3:
         return None

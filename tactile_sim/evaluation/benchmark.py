@@ -77,17 +77,19 @@ def plan_jobs(
     source: Any,
     configs: Mapping[str, RegistrationConfig],
     thesis_instances: int,
+    touches: int = 0,
 ) -> list[Job]:
     """One job per instance with the registration of every method; thesis mode (about a
     minute an instance) only on the first ``thesis_instances`` (0: all), spread over the
-    models: instance 0 of each, then 1, ..."""
+    models: instance 0 of each, then 1, ...; at most ``touches`` verification touches
+    after the curves."""
     first = sorted(specs, key=lambda s: (s.index, s.model))[: thesis_instances or len(specs)]
     thesis_keys = {s.key for s in first}
     jobs = []
     for spec in specs:
         chosen = tuple(c for m, c in configs.items() if m != "thesis" or spec.key in thesis_keys)
         if chosen:
-            jobs.append(Job(spec, source, chosen))
+            jobs.append(Job(spec, source, chosen, touches))
     return jobs
 
 
@@ -204,7 +206,11 @@ def run_synthetic(
     source = syn.source()
     path = _results_path(config, name, source, methods.config(), "", _directory(database))
     jobs = plan_jobs(
-        instance_specs(database, source), source, methods.configs(), methods.thesis_instances
+        instance_specs(database, source),
+        source,
+        methods.configs(),
+        methods.thesis_instances,
+        methods.touches,
     )
     records = _records(config, _directory(database), jobs, path)
     summary = summarize(records)
@@ -374,7 +380,13 @@ def run_sim(config: BenchmarkConfig, *, echo: Echo = print) -> dict[str, Any]:
             configs = {registration.mode.value: registration}
         name = f"sim_{experiment}"
         path = _results_path(config, name, source, registration, tag, handle)
-        jobs = plan_jobs(source.specs(None), source, configs, config.methods.thesis_instances)
+        jobs = plan_jobs(
+            source.specs(None),
+            source,
+            configs,
+            config.methods.thesis_instances,
+            config.methods.touches if experiment == "catalog" else 0,
+        )
         records = _records(config, handle, jobs, path)
         found = summarize(records)
         summary |= summary_json(found)

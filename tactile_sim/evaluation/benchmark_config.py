@@ -151,12 +151,16 @@ class MethodSettings:
         How far the fast mode takes the objects to differ from their models (RMS, mm:
         :attr:`recognition.FastConfig.model_mismatch_m`): the experimenter's knowledge
         of the model's accuracy, as of the sensor's noise.
+    touches : int
+        Verification touches after the curves, at most, until the answer's confidence
+        reaches 0.99 (fast mode; :func:`recognition.verify`); 0: none.
     """
 
     methods: tuple[str, ...] = METHODS
     delta_per_mm: float = 0.03
     thesis_instances: int = 20
     model_mismatch_mm: float = 0.0
+    touches: int = 0
 
     def config(self, method: str = "fast", delta_per_mm: float | None = None) -> RegistrationConfig:
         """The registration of ``method`` (``delta_per_mm`` replaced in a sweep)."""

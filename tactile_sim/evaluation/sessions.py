@@ -35,6 +35,7 @@ from tactile_sim.probing import (
     resolve_object,
 )
 from tactile_sim.probing.session import data_point_in_object
+from tactile_sim.probing.touches import RobotToucher
 from tactile_sim.sensor import SensorConfig
 
 __all__ = [
@@ -236,7 +237,8 @@ class SimulatedSource:
             assert true_curves is not None
             curves, reference = true_curves, session.curves
         point = data_point_in_object(curves, truth.T_world_from_object)
-        return Instance(curves, point, info, reference)
+        toucher = RobotToucher(session)
+        return Instance(curves, point, info, reference, toucher, toucher.limits)
 
 
 def catalog_experiment(**overrides: Any) -> SimulatedSource:

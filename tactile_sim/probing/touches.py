@@ -34,7 +34,7 @@ from tactile_sim.errors import SimulationError, UnreachablePoint
 from tactile_sim.kinematics import COBRA600, inverse_kinematics
 from tactile_sim.probing.session import ProbeSession
 
-__all__ = ["TouchRecord", "TouchSession", "touch_limits", "touch_until_sure"]
+__all__ = ["RobotToucher", "TouchRecord", "TouchSession", "touch_limits", "touch_until_sure"]
 
 Array = NDArray[np.float64]
 
@@ -168,22 +168,67 @@ def touch_until_sure(
     """
     start = time.perf_counter()
     runner = session.runner
-    if runner is None and max_touches > 0:
-        raise SimulationError("the session's rig is gone: touches need a fresh probe_object")
+    toucher = RobotToucher(session)
     if recognition is None:
         recognition = database.recognize(session.curves, registration, noise=noise, belief=belief)
     assert recognition.belief is not None  # mesh databases give a belief
-    records: list[TouchRecord] = []
-    made: list[tuple[Array | None, Array | None, Array | None, float]] = []
+    verification = verify(
+        database,
+        recognition.belief,
+        toucher,
+        toucher.limits,
+        max_touches=max_touches,
+        confidence=confidence,
+        seed=session.seed,
+    )
+    if runner is not None and toucher.made:
+        runner.retreat()
+    records = tuple(
+        TouchRecord(
+            step.plan,
+            point,
+            normal,
+            truth,
+            step.confidence,
+            step.best_model,
+            step.recognition_time_s,
+            seconds,
+        )
+        for step, (point, normal, truth, seconds) in zip(
+            verification.steps, toucher.made, strict=True
+        )
+    )
+    return TouchSession(recognition, verification, records, time.perf_counter() - start)
 
-    def touch(plan: TouchPlan) -> Array | None:
-        assert runner is not None
+
+class RobotToucher:
+    """The rig of a fresh session as the touch of :func:`recognition.verify`: retreat to
+    the travel height, over the approach's start, down to it, one guarded approach along
+    the planned direction. ``made`` keeps each touch's sensed point and normal, MuJoCo's
+    contact (None without one) and the wall time taken.
+
+    Raises
+    ------
+    SimulationError
+        The session's rig is gone (a session rebuilt from files).
+    """
+
+    def __init__(self, session: ProbeSession) -> None:
+        if session.runner is None:
+            raise SimulationError("the session's rig is gone: touches need a fresh probe_object")
+        self.runner = session.runner
+        self.limits = touch_limits(session)
+        self.made: list[tuple[Array | None, Array | None, Array | None, float]] = []
+
+    def __call__(self, plan: TouchPlan) -> Array | None:
+        """The sensed contact of the planned touch (None: nothing within its travel)."""
+        runner = self.runner
         began = time.perf_counter()
         runner.retreat()
         runner.travel_to(plan.start)
         estimate = runner.rig.approach(plan.start, plan.direction, plan.travel_m)
         if estimate is None:
-            made.append((None, None, None, time.perf_counter() - began))
+            self.made.append((None, None, None, time.perf_counter() - began))
             return None
         sample = runner.sample(estimate)
         touched = sample.touched if np.all(np.isfinite(sample.touched)) else None
@@ -194,32 +239,5 @@ def touch_until_sure(
         # r (1 - cos) of the angle between them.
         radius = runner.rig.sensor.robot.probe.tip_radius_m
         point = estimate.tip_centre_in_world + radius * plan.direction
-        made.append((point, estimate.normal_in_world, touched, time.perf_counter() - began))
+        self.made.append((point, estimate.normal_in_world, touched, time.perf_counter() - began))
         return point
-
-    limits = touch_limits(session)
-    verification = verify(
-        database,
-        recognition.belief,
-        touch,
-        limits,
-        max_touches=max_touches,
-        confidence=confidence,
-        seed=session.seed,
-    )
-    if runner is not None and made:
-        runner.retreat()
-    for step, (point, normal, truth, seconds) in zip(verification.steps, made, strict=True):
-        records.append(
-            TouchRecord(
-                step.plan,
-                point,
-                normal,
-                truth,
-                step.confidence,
-                step.best_model,
-                step.recognition_time_s,
-                seconds,
-            )
-        )
-    return TouchSession(recognition, verification, tuple(records), time.perf_counter() - start)
