@@ -33,6 +33,12 @@ from recognition.evaluation import (
     summary_json,
 )
 from recognition.evaluation import run as run_jobs
+from recognition.evaluation.calibration import (
+    reliability,
+    reliability_figure,
+    touch_summary,
+    touches_section,
+)
 from recognition.evaluation.figures import catalog_sessions_figure, solids_figure, sweep_figure
 from recognition.evaluation.reports import RunInfo, catalog_report, machine, sweep_report
 from recognition.files import write_json_atomic
@@ -154,6 +160,28 @@ def _write_report(config: BenchmarkConfig, file_name: str, text: str, echo: Echo
     echo(text)
 
 
+def _calibration(config: BenchmarkConfig, stem: str, records: Sequence[Record]) -> str:
+    """The belief's reliability (after the curves and after the touches) as
+    ``<stem>_reliability`` .json and .png beside the report; returns the report's
+    section ("" when no record carries a confidence)."""
+    answers = [r for r in records if r.confidence is not None]
+    if not answers:
+        return ""
+    out = Path(config.report.out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    payload: dict[str, Any] = {
+        "command": config.report.command,
+        "after_curves": reliability(answers),
+    }
+    if any(r.touches is not None for r in answers):
+        payload["after_touches"] = reliability(answers, after_touches=True)
+        payload["touches"] = touch_summary(answers)
+    write_json_atomic(out / f"{stem}_reliability.json", payload)
+    figure = out / f"{stem}_reliability.png"
+    reliability_figure(answers, figure)
+    return "\n" + touches_section(answers, figure.name)
+
+
 def check_config(config: BenchmarkConfig) -> None:
     """Checks a run's settings before any work: makes every instance source the run uses
     (they check their settings) and reads the records file given (``config.run.results``).
@@ -225,6 +253,7 @@ def run_synthetic(
         f"{methods.thesis_instances or 'all'} instances. Records: `{_shown(path)}`."
     )
     text = catalog_report(name, _run_info(config, started), settings, database, records, summary)
+    text += _calibration(config, f"{name}{config.report.tag}", records)
     _write_report(config, f"{name}{config.report.tag}.md", text, echo)
     return payload
 
@@ -412,6 +441,7 @@ def run_sim(config: BenchmarkConfig, *, echo: Echo = print) -> dict[str, Any]:
             )
             solids_figure(records, names, figure)
         text += f"\n![{name}]({figure.name})\n"
+        text += _calibration(config, f"{name}{tag}", records)
         _write_report(config, f"{name}{tag}.md", text, echo)
     if config.report.json_path:
         write_json_atomic(config.report.json_path, summary)

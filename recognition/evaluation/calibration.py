@@ -1,0 +1,191 @@
+"""How far the belief's confidence can be trusted, and what the verification touches bought.
+
+An answer is *right* when the belief's best hypothesis names the true model and puts p
+within 1 mm of the truth (up to the model's symmetries,
+:meth:`~recognition.evaluation.records.Record.answered_right`). The reliability diagram
+bins the answers by confidence and sets each bin's mean confidence against its fraction
+right; the expected calibration error (ECE) is the mean gap, weighted by the bins' counts.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from recognition.evaluation.records import Record
+
+__all__ = [
+    "SURE",
+    "reliability",
+    "reliability_figure",
+    "touch_summary",
+    "touches_section",
+]
+
+#: Answers given with at least this confidence are *sure* (the loop stops there).
+SURE = 0.99
+
+
+def _answers(records: Sequence[Record], after_touches: bool) -> tuple[np.ndarray, np.ndarray]:
+    """(confidence, right) of every record with a belief."""
+    rows = [r for r in records if r.confidence is not None]
+    confidence = np.array(
+        [
+            r.touches["confidence"] if after_touches and r.touches is not None else r.confidence
+            for r in rows
+        ],
+        dtype=float,
+    )
+    right = np.array([r.answered_right(after_touches) for r in rows], dtype=bool)
+    return confidence, right
+
+
+def reliability(
+    records: Sequence[Record], *, after_touches: bool = False, bins: int = 10
+) -> dict[str, Any]:
+    """The reliability diagram of the records' answers (after the curves, or after the
+    touches), JSON-ready: ``answers``, ``right``, ``ece``, ``sure`` (answers with
+    confidence >= :data:`SURE`) and ``sure_right`` (the fraction of them right, None
+    without one), and per bin ``bins``: ``low``, ``high``, ``count``,
+    ``mean_confidence``, ``fraction_right``."""
+    confidence, right = _answers(records, after_touches)
+    edges = np.linspace(0.0, 1.0, bins + 1)
+    index = np.clip(np.digitize(confidence, edges) - 1, 0, bins - 1)
+    rows, ece = [], 0.0
+    for b in range(bins):
+        mine = index == b
+        count = int(mine.sum())
+        row: dict[str, Any] = {"low": float(edges[b]), "high": float(edges[b + 1]), "count": count}
+        if count:
+            row["mean_confidence"] = float(confidence[mine].mean())
+            row["fraction_right"] = float(right[mine].mean())
+            ece += count * abs(row["mean_confidence"] - row["fraction_right"])
+        rows.append(row)
+    sure = confidence >= SURE
+    return {
+        "answers": len(confidence),
+        "right": float(right.mean()) if len(right) else None,
+        "ece": float(ece / len(confidence)) if len(confidence) else None,
+        "sure": int(sure.sum()),
+        "sure_right": float(right[sure].mean()) if sure.any() else None,
+        "bins": rows,
+    }
+
+
+def touch_summary(records: Sequence[Record]) -> dict[str, Any] | None:
+    """What the touches did, JSON-ready (None when no record made touches): answers right
+    after the curves and after the touches, touches made (median, mean, max), the
+    sessions sure after the curves that made none, and the planning and update time per
+    touch (median, p90, max)."""
+    touched = [r for r in records if r.touches is not None and r.confidence is not None]
+    if not touched:
+        return None
+    made = np.array([r.touches["made"] for r in touched if r.touches is not None])
+    times = np.array(
+        [t for r in touched if r.touches is not None for t in r.touches["recognition_times_s"]]
+    )
+    sure_first = [r for r in touched if r.confidence is not None and r.confidence >= SURE]
+    return {
+        "instances": len(touched),
+        "right_after_curves": float(np.mean([r.answered_right() for r in touched])),
+        "right_after_touches": float(np.mean([r.answered_right(True) for r in touched])),
+        "recognized_after_touches": float(
+            np.mean([bool(r.touches and r.touches["success"]) for r in touched])
+        ),
+        "touches_median": float(np.median(made)),
+        "touches_mean": float(np.mean(made)),
+        "touches_max": int(made.max()),
+        "sure_after_curves": len(sure_first),
+        "sure_after_curves_touched": int(
+            sum(1 for r in sure_first if r.touches is not None and r.touches["made"] > 0)
+        ),
+        "touch_time_median_s": float(np.median(times)) if times.size else None,
+        "touch_time_p90_s": float(np.percentile(times, 90)) if times.size else None,
+        "touch_time_max_s": float(times.max()) if times.size else None,
+    }
+
+
+def _percent(value: float | None) -> str:
+    return "-" if value is None else f"{100 * value:.1f} %"
+
+
+def touches_section(records: Sequence[Record], figure_name: str | None = None) -> str:
+    """Markdown: the belief's calibration after the curves (and after the touches), and
+    what the touches did; empty when no record carries a confidence."""
+    if not any(r.confidence is not None for r in records):
+        return ""
+    lines = [
+        "## Confidence and verification touches",
+        "",
+        "An answer is right when the belief's best hypothesis names the true model and puts "
+        "p within 1 mm of the truth (up to the model's symmetries). 'sure': confidence "
+        f">= {SURE}. ECE: expected calibration error over 10 bins of confidence.",
+        "",
+        "| answers | right | sure | right among sure | ECE |",
+        "|---|---|---|---|---|",
+    ]
+    stages = [("after the curves", reliability(records))]
+    if any(r.touches is not None for r in records):
+        stages.append(("after the touches", reliability(records, after_touches=True)))
+    lines[-2] = "| stage | answers | right | sure | right among sure | ECE |"
+    lines[-1] = "|---|---|---|---|---|---|"
+    for name, stage in stages:
+        lines.append(
+            f"| {name} | {stage['answers']} | {_percent(stage['right'])} | {stage['sure']} | "
+            f"{_percent(stage['sure_right'])} | "
+            f"{'-' if stage['ece'] is None else format(stage['ece'], '.3f')} |"
+        )
+    touched = touch_summary(records)
+    if touched is not None:
+        lines += [
+            "",
+            f"Touches: median {touched['touches_median']:g}, mean "
+            f"{touched['touches_mean']:.2f}, at most {touched['touches_max']}; "
+            f"{touched['sure_after_curves']} answers were sure after the curves, "
+            f"{touched['sure_after_curves_touched']} of them touched. Planning and update "
+            "per touch: median "
+            + (
+                "-"
+                if touched["touch_time_median_s"] is None
+                else f"{touched['touch_time_median_s']:.3f} s, p90 "
+                f"{touched['touch_time_p90_s']:.3f} s, max {touched['touch_time_max_s']:.3f} s"
+            )
+            + f". Recognised after the touches: {_percent(touched['recognized_after_touches'])}.",
+        ]
+    if figure_name:
+        lines += ["", f"![reliability]({figure_name})"]
+    return "\n".join(lines) + "\n"
+
+
+def reliability_figure(records: Sequence[Record], path: Path) -> None:
+    """PNG: the reliability diagram after the curves (and after the touches, if made)."""
+    from recognition.evaluation.figures import _pyplot
+
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(4.6, 4.2))
+    ax.plot([0, 1], [0, 1], color="0.7", lw=1, label="calibrated")
+    stages = [("after the curves", reliability(records), "o-")]
+    if any(r.touches is not None for r in records):
+        stages.append(("after the touches", reliability(records, after_touches=True), "s-"))
+    for name, stage, style in stages:
+        rows = [b for b in stage["bins"] if b["count"]]
+        ax.plot(
+            [b["mean_confidence"] for b in rows],
+            [b["fraction_right"] for b in rows],
+            style,
+            label=f"{name} (ECE {stage['ece']:.3f})",
+        )
+    ax.set(
+        xlabel="confidence",
+        ylabel="fraction right (model, p within 1 mm)",
+        xlim=(0, 1),
+        ylim=(0, 1.02),
+        title="reliability",
+    )
+    ax.legend(loc="upper left", fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
