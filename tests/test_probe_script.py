@@ -79,7 +79,7 @@ def test_touches_resolve_a_session_the_sweeps_leave_unsure(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     probe = load_script("probe")
-    args = ["--object", "fish", "--seed", "1", "--model-error-mm", "0.1", "--rerun", "off"]
+    args = ["--object", "fish", "--seed", "1", "--model-error-mm", "0.1"]
     summary = probe.run(probe.parse_args([*args, "--out", str(tmp_path)]))
     # the three curves put p 1.6 mm off and are not sure of it; the touches are
     assert summary["location_error_mm"] > 1.0 and summary["confidence"] < 0.99
@@ -90,8 +90,16 @@ def test_touches_resolve_a_session_the_sweeps_leave_unsure(
     out = capsys.readouterr().out
     assert "confidence after the sweeps" in out and "touch 1: contact" in out
     assert summary["timings_s"]["touches"] > 0
+    # the recording shows each touch and the hypotheses as ghost models
+    from tactile_sim.recording import read_recording
+
+    entities = read_recording(summary["recording"]).entities
+    made = len(touches["made"])
+    assert {f"world/touches/{k}/approach" for k in range(1, made + 1)} <= set(entities)
+    assert "world/hypotheses/0" in entities and "world/hypotheses/0/label" in entities
     # --touches 0: the thesis's three curves alone
-    summary = probe.run(probe.parse_args([*args, "--out", str(tmp_path), "--touches", "0"]))
+    args += ["--rerun", "off", "--touches", "0"]
+    summary = probe.run(probe.parse_args([*args, "--out", str(tmp_path)]))
     assert "touches" not in summary
 
 

@@ -43,6 +43,8 @@ class TouchStep:
         The best hypothesis's model after the update.
     recognition_time_s : float
         Planning and updating, seconds (the touch itself excluded).
+    belief : Belief
+        The belief after the update.
     """
 
     plan: TouchPlan
@@ -50,6 +52,7 @@ class TouchStep:
     confidence: float
     best_model: str | None
     recognition_time_s: float
+    belief: Belief
 
 
 @dataclass(frozen=True)
@@ -134,6 +137,7 @@ def verify(
                 belief.confidence,
                 None if best is None else best.model,
                 planned + time.perf_counter() - start,
+                belief,
             )
         )
     return Verification(belief, tuple(steps), initial, stop)

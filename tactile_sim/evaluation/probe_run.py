@@ -237,7 +237,12 @@ def probe_run(config: ProbeRunConfig) -> dict[str, Any]:
         from tactile_sim.recording import record_probe_run
 
         summary["recording"] = record_probe_run(
-            session, result, database, mode=config.rerun, path=out / f"{stem}.rrd"
+            session,
+            result,
+            database,
+            touches=touched,
+            mode=config.rerun,
+            path=out / f"{stem}.rrd",
         )
     if config.json_path is not None:
         write_json_atomic(Path(config.json_path), summary)

@@ -68,6 +68,7 @@ class Rig:
         # Steps like mujoco.mj_step(model, data[, nstep]); the recorder samples on the way,
         # the tip's contact box follows the tip.
         step = mujoco.mj_step if recorder is None else recorder.step
+        self.recorder = recorder
         self.tip_contact = TipContact(probe_scene) if probe_scene.tip_contact else None
         self._step = step if self.tip_contact is None else self.tip_contact.stepping(step)
         self.config = config

@@ -33,6 +33,7 @@ from recognition import (
 from tactile_sim.errors import SimulationError, UnreachablePoint
 from tactile_sim.kinematics import COBRA600, inverse_kinematics
 from tactile_sim.probing.session import ProbeSession
+from tactile_sim.trajectory import Trajectory
 
 __all__ = ["RobotToucher", "TouchRecord", "TouchSession", "touch_limits", "touch_until_sure"]
 
@@ -69,6 +70,8 @@ class TouchRecord:
         Planning and updating, seconds.
     robot_time_s : float
         Wall time of the motion and the approach, seconds.
+    sim_time_s : float
+        Simulated time at the reading (or when the approach gave up), seconds.
     """
 
     plan: TouchPlan
@@ -79,6 +82,7 @@ class TouchRecord:
     best_model: str | None
     recognition_time_s: float
     robot_time_s: float
+    sim_time_s: float
 
 
 @dataclass(frozen=True)
@@ -94,12 +98,16 @@ class TouchSession:
     touches : tuple of TouchRecord
     wall_seconds : float
         Recognition, planning, updates and robot motion, seconds.
+    trajectory : Trajectory or None
+        The rig's state sampled through the sweeps and the touches (when the session
+        recorded one).
     """
 
     recognition: Recognition
     verification: Verification
     touches: tuple[TouchRecord, ...]
     wall_seconds: float
+    trajectory: Trajectory | None = None
 
 
 def touch_limits(session: ProbeSession) -> TouchLimits:
@@ -193,12 +201,20 @@ def touch_until_sure(
             step.best_model,
             step.recognition_time_s,
             seconds,
+            sim_time,
         )
-        for step, (point, normal, truth, seconds) in zip(
+        for step, (point, normal, truth, seconds, sim_time) in zip(
             verification.steps, toucher.made, strict=True
         )
     )
-    return TouchSession(recognition, verification, records, time.perf_counter() - start)
+    recorder = toucher.runner.rig.recorder
+    return TouchSession(
+        recognition,
+        verification,
+        records,
+        time.perf_counter() - start,
+        None if recorder is None else recorder.trajectory(),
+    )
 
 
 class RobotToucher:
@@ -218,7 +234,7 @@ class RobotToucher:
             raise SimulationError("the session's rig is gone: touches need a fresh probe_object")
         self.runner = session.runner
         self.limits = touch_limits(session)
-        self.made: list[tuple[Array | None, Array | None, Array | None, float]] = []
+        self.made: list[tuple[Array | None, Array | None, Array | None, float, float]] = []
 
     def __call__(self, plan: TouchPlan) -> Array | None:
         """The sensed contact of the planned touch (None: nothing within its travel)."""
@@ -228,7 +244,8 @@ class RobotToucher:
         runner.travel_to(plan.start)
         estimate = runner.rig.approach(plan.start, plan.direction, plan.travel_m)
         if estimate is None:
-            self.made.append((None, None, None, time.perf_counter() - began))
+            sim_time = float(runner.rig.data.time)
+            self.made.append((None, None, None, time.perf_counter() - began, sim_time))
             return None
         sample = runner.sample(estimate)
         touched = sample.touched if np.all(np.isfinite(sample.touched)) else None
@@ -239,5 +256,13 @@ class RobotToucher:
         # r (1 - cos) of the angle between them.
         radius = runner.rig.sensor.robot.probe.tip_radius_m
         point = estimate.tip_centre_in_world + radius * plan.direction
-        self.made.append((point, estimate.normal_in_world, touched, time.perf_counter() - began))
+        self.made.append(
+            (
+                point,
+                estimate.normal_in_world,
+                touched,
+                time.perf_counter() - began,
+                estimate.reading.time_s,
+            )
+        )
         return point

@@ -2,10 +2,12 @@
 
 Entity paths mirror the physical tree: ``world/table``, ``world/object``,
 ``world/robot/<body>``, ``world/probe/{tip,sensed,contacts,normals}``,
-``world/curves/{alpha,beta,gamma,p}``; the stylus signals go to ``sensors/deflection`` and
-``sensors/force``, the recognition to ``recognition/{ranking,models/<name>}`` and the
-messages to ``log``. Static things are logged once; the rest on the timelines ``step``
-and ``sim_time``.
+``world/curves/{alpha,beta,gamma,p}``; the verification touches to
+``world/touches/<k>/{approach,contact}`` and the hypotheses they tell apart, as ghost
+models at their poses, to ``world/hypotheses/<rank>``; the stylus signals go to
+``sensors/deflection`` and ``sensors/force``, the recognition to
+``recognition/{ranking,models/<name>}`` and the messages to ``log``. Static things are
+logged once; the rest on the timelines ``step`` and ``sim_time``.
 """
 
 from __future__ import annotations
@@ -21,8 +23,9 @@ from recognition.rigid import apply_pose
 if TYPE_CHECKING:
     import rerun as rr
 
-    from recognition import ModelDatabase, Recognition
+    from recognition import Belief, ModelDatabase, Recognition
     from tactile_sim.probing import ProbeSession
+    from tactile_sim.probing.touches import TouchSession
     from tactile_sim.trajectory import Trajectory, VisualGeom
 
 __all__ = [
@@ -44,6 +47,11 @@ _SURFACE_POINTS = 3000
 """Vertices drawn per database model (a subsample; candidates are drawn in full)."""
 _MODEL_SPACING_M = 0.12
 _MODELS_PER_ROW = 5
+_GHOSTS = 3
+"""Hypotheses drawn as ghost models at their poses, most probable first."""
+_GHOST_POINTS = 2000
+_GHOST_COLORS = np.array([[80, 220, 120, 90], [230, 120, 220, 70], [120, 200, 240, 60]], np.uint8)
+_APPROACH_COLOR = (255, 90, 30, 255)
 
 
 def _body_path(body: str) -> str:
@@ -368,11 +376,102 @@ def _log_recognition(
         )
 
 
+def _log_hypotheses(
+    rec: rr.RecordingStream, belief: Belief, database: ModelDatabase, title: str
+) -> None:
+    """The belief's most probable hypotheses as ghost models placed in the world (the
+    curves' frame) by their poses, labelled with their posterior."""
+    import rerun as rr
+
+    hypotheses = belief.hypotheses[:_GHOSTS]
+    for rank in range(_GHOSTS):
+        path = f"world/hypotheses/{rank}"
+        if rank >= len(hypotheses):
+            rec.log(path, rr.Clear(recursive=True))
+            continue
+        h = hypotheses[rank]
+        vertices = np.asarray(database[h.model].vertices)
+        shown = np.random.default_rng(rank).choice(
+            len(vertices), min(_GHOST_POINTS, len(vertices)), replace=False
+        )
+        T = np.linalg.inv(h.T_model_from_data)  # world from model
+        rec.log(
+            path,
+            rr.Points3D(
+                apply_pose(T, vertices[np.sort(shown)]),
+                colors=[_GHOST_COLORS[rank]],
+                radii=[0.2e-3],
+            ),
+        )
+        rec.log(
+            f"{path}/label",
+            rr.Points3D(
+                [apply_pose(T, h.location[None])[0]],
+                labels=[f"{h.model} {h.posterior:.2f}"],
+                radii=[0.5e-3],
+            ),
+        )
+    rec.log(
+        "log",
+        rr.TextLog(
+            f"{title}: confidence {belief.confidence:.3f}; "
+            + ", ".join(f"{h.model} {h.posterior:.2f}" for h in hypotheses),
+            level="INFO",
+        ),
+    )
+
+
+def _log_touches(
+    rec: rr.RecordingStream,
+    touches: TouchSession,
+    database: ModelDatabase | None,
+    timestep_s: float | None,
+) -> None:
+    """Each planned touch (its approach as an arrow), its sensed contact and the
+    hypotheses before and after it."""
+    import rerun as rr
+
+    belief = touches.recognition.belief
+    if database is not None and belief is not None:
+        _log_hypotheses(rec, belief, database, "after the sweeps")
+    for k, (touch, step) in enumerate(
+        zip(touches.touches, touches.verification.steps, strict=True), start=1
+    ):
+        _set_time(rec, touch.sim_time_s, timestep_s)
+        plan = touch.plan
+        path = f"world/touches/{k}"
+        rec.log(
+            f"{path}/approach",
+            rr.Arrows3D(
+                origins=[plan.start],
+                vectors=[plan.travel_m * plan.direction],
+                colors=[_APPROACH_COLOR],
+                radii=[0.15e-3],
+            ),
+            static=True,
+        )
+        if touch.point_in_world is not None:
+            rec.log(
+                f"{path}/contact",
+                rr.Points3D(
+                    [touch.point_in_world],
+                    colors=[_CONTACT_COLOR],
+                    radii=[0.6e-3],
+                    labels=[f"touch {k}"],
+                ),
+                static=True,
+            )
+        met = "contact" if touch.point_in_world is not None else "no contact"
+        if database is not None:
+            _log_hypotheses(rec, step.belief, database, f"touch {k} ({met})")
+
+
 def log_probe_run(
     rec: rr.RecordingStream,
     session: ProbeSession,
     result: Recognition | None = None,
     database: ModelDatabase | None = None,
+    touches: TouchSession | None = None,
 ) -> None:
     """Logs a probing session (and its recognition) to a rerun recording stream.
 
@@ -387,10 +486,15 @@ def log_probe_run(
     database : recognition.ModelDatabase or None
         The database ``result`` came from: candidate locations and the registered curves
         are drawn on its models.
+    touches : TouchSession or None
+        The verification touches after the sweeps (their approaches, contacts, and the
+        hypotheses as ghost models after the sweeps and after each touch).
     """
     import rerun as rr
 
     trajectory: Trajectory | None = session.trajectory
+    if touches is not None and touches.trajectory is not None:
+        trajectory = touches.trajectory
     timestep = None if trajectory is None else trajectory.timestep_s
     rec.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
     if trajectory is not None:
@@ -414,3 +518,5 @@ def log_probe_run(
     )
     if result is not None:
         _log_recognition(rec, session, result, database)
+    if touches is not None:
+        _log_touches(rec, touches, database, timestep)

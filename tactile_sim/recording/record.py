@@ -14,6 +14,7 @@ from tactile_sim.recording.viewer import check_display, rerun_executable
 if TYPE_CHECKING:
     from recognition import ModelDatabase, Recognition
     from tactile_sim.probing import ProbeSession
+    from tactile_sim.probing.touches import TouchSession
 
 __all__ = [
     "APPLICATION_ID",
@@ -34,6 +35,7 @@ def record_probe_run(
     result: Recognition | None = None,
     database: ModelDatabase | None = None,
     *,
+    touches: TouchSession | None = None,
     mode: str = "save",
     path: str | Path | None = None,
     application_id: str = APPLICATION_ID,
@@ -45,6 +47,8 @@ def record_probe_run(
     session : tactile_sim.probing.ProbeSession
     result : recognition.Recognition or None
     database : recognition.ModelDatabase or None
+    touches : TouchSession or None
+        The verification touches after the sweeps.
     mode : {"save", "spawn", "serve"}
         "save" writes ``path``; "spawn" also streams to a native viewer it starts;
         "serve" writes ``path`` for :func:`serve_recording` to serve to a browser.
@@ -86,7 +90,7 @@ def record_probe_run(
             rec.set_sinks(*sinks, default_blueprint=blueprint)
         else:
             rec.save(path, default_blueprint=blueprint)
-        log_probe_run(rec, session, result, database)
+        log_probe_run(rec, session, result, database, touches)
     finally:
         rec.disconnect()
     if path is not None and not path.is_file():
