@@ -20,7 +20,8 @@ kernel (infinitely smooth) calls micrometre roughness of the residuals impossibl
 made the true model of a mismatched object look thousands of log-units worse than it
 is. Each residual is clipped at ``outlier_sigmas`` effective noise levels (a gross outlier
 counts alike under every hypothesis, and is reported). With a uniform prior over the
-hypotheses, the posterior of h is proportional to exp(-r_h^T Sigma^-1 r_h / 2),
+hypotheses, the posterior of h is proportional to exp(-r_h^T Sigma^-1 r_h / 2) (its whitened
+residuals counted by Huber's loss beyond ``huber_k``, :class:`NoiseModel`),
 normalised over all hypotheses of all models and the alternative that none of them is
 right (:attr:`BeliefConfig.unexplained_p`: a search can miss the truth).
 
@@ -38,7 +39,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.linalg import cho_factor, cho_solve, solve_triangular
+from scipy.linalg import cholesky, solve_triangular
 from scipy.special import gammaincinv
 
 from recognition.errors import InvalidArgument
@@ -55,6 +56,12 @@ Array = NDArray[np.float64]
 #: Fixed standard normal samples: the probability that a location lies within a radius
 #: is the fraction of these, scaled by its covariance, that do (same belief, same value).
 _NORMAL_SAMPLES = np.random.default_rng(0).standard_normal((4096, 3))
+
+
+def huber(z: Array, k: float) -> Array:
+    """Huber's loss of each z: z^2 / 2 for |z| <= k, k |z| - k^2 / 2 beyond."""
+    a = np.abs(z)
+    return np.where(a <= k, 0.5 * a * a, k * a - 0.5 * k * k)
 
 
 def within_probability(offset: Array, covariance: Array, radius_m: float) -> float:
@@ -86,6 +93,10 @@ class NoiseModel:
         level and makes the point an outlier of the hypothesis.
     outlier_floor_m : float
         The outlier level is at least this, metres.
+    huber_k : float
+        The whitened residuals z count z^2 / 2 up to this size and linearly beyond
+        (Huber): a few points that neither sensor noise nor a smooth mismatch explain (a
+        sharp feature, a slip of the stylus) do not decide the posterior alone.
     """
 
     sensor_noise_m: float | None = None
@@ -94,6 +105,7 @@ class NoiseModel:
     correlation_m: float = 5.0e-3
     outlier_sigmas: float = 5.0
     outlier_floor_m: float = 0.1e-3
+    huber_k: float = 3.0
 
     def __post_init__(self) -> None:
         values = {
@@ -122,6 +134,11 @@ class NoiseModel:
         u *= np.sqrt(3.0) / self.correlation_m
         K = self.model_mismatch_m**2 * (1.0 + u) * np.exp(-u)
         return K + sensor_m**2 * np.eye(len(points))
+
+    def log_likelihood(self, whitened: Array) -> float:
+        """The log-likelihood (up to a constant) of residuals whitened by Sigma's
+        Cholesky factor: -sum of :func:`huber` at ``huber_k``."""
+        return -float(np.sum(huber(whitened, self.huber_k)))
 
     def outlier_level_m(self, sensor_m: float) -> float:
         """Residual level beyond which a point is an outlier, metres."""
@@ -157,9 +174,10 @@ class BeliefConfig:
     radius_m : float
         An answer is right when it names the right model and puts p within this of the
         truth (the confidence's sense), metres.
-    explore_hypotheses, explore_log_gap, explore_steps_m
-        The valleys of the most probable hypotheses explored at each update
-        (:meth:`Belief._explored`).
+    explore_hypotheses, explore_log_gap, explore_sd_m, explore_steps_m
+        The valleys of the most probable hypotheses whose p is uncertain by more than
+        ``explore_sd_m`` (standard deviation along its least determined direction)
+        explored at each update (:meth:`Belief._explored`).
     prior_rotation_rad, prior_translation_m : float
         Standard deviations of the weak prior on each hypothesis's pose about its fit
         (keeps the Laplace covariance finite where the data leave a motion free).
@@ -174,6 +192,7 @@ class BeliefConfig:
     unexplained_p: float = 1e-3
     radius_m: float = 1.0e-3
     explore_hypotheses: int = 3
+    explore_sd_m: float = 0.2e-3
     explore_log_gap: float = 10.0
     explore_steps_m: tuple[float, ...] = (2.0e-3, 4.0e-3, 7.0e-3)
     prior_rotation_rad: float = 0.2
@@ -371,11 +390,12 @@ class Belief:
         points, the valleys of the most probable explored (:meth:`_explored`),
         near-duplicates merged, scored and normalised."""
         config = self.config
-        factor = cho_factor(self.noise.covariance(self.points, self.sensor_m), lower=True)
-        found = self._fitted(hypotheses, models, factor)
+        lower = cholesky(self.noise.covariance(self.points, self.sensor_m), lower=True)
+        whitening = solve_triangular(lower, np.eye(len(lower)), lower=True)
+        found = self._fitted(hypotheses, models, whitening)
         if not found:
             return self
-        found += self._fitted(self._explored(found), models, factor)
+        found += self._fitted(self._explored(found), models, whitening)
         found = _merged(found, self.point)
         logs = np.array([h.log_likelihood for h in found])
         # "none of these": as likely as a fit whose whitened residuals sit at the
@@ -409,13 +429,12 @@ class Belief:
         self,
         hypotheses: Sequence[tuple[str, Array]],
         models: Mapping[str, MeshModel],
-        factor: tuple[Array, bool],
+        whitening: Array,
     ) -> list[Hypothesis]:
         """``hypotheses`` (model, T_model_from_data) refined on all the points and scored
-        (posterior 0: not normalised)."""
+        (posterior 0: not normalised); ``whitening``: the inverse of Sigma's lower
+        Cholesky factor."""
         level = self.noise.outlier_level_m(self.sensor_m)
-        lower = np.tril(factor[0])
-        whitening = solve_triangular(lower, np.eye(len(lower)), lower=True)
         found: list[Hypothesis] = []
         by_model: dict[str, list[Array]] = {}
         for name, T in hypotheses:
@@ -441,13 +460,13 @@ class Belief:
             errors = np.mean(np.minimum(np.abs(signed), level), axis=1)
             for k in range(len(R)):
                 r = np.clip(signed[k], -level, level)
-                log_likelihood = -0.5 * float(r @ cho_solve(factor, r))
+                log_likelihood = self.noise.log_likelihood(whitening @ r)
                 log_likelihood += self._miss_penalty(model, R[k], t[k])
                 location = R[k] @ self.point + t[k]
                 rows = slice(k * len(self.points), (k + 1) * len(self.points))
                 smooth = smooth_normals(model, closest[rows], face[rows])
                 pivot, pose_cov, location_cov = self._laplace(
-                    moved[k], smooth, np.abs(signed[k]) <= level, location, factor
+                    moved[k], smooth, np.abs(signed[k]) <= level, location, whitening
                 )
                 found.append(
                     Hypothesis(
@@ -487,6 +506,8 @@ class Belief:
         for h in top:
             if h.log_likelihood < best - config.explore_log_gap:
                 continue
+            if np.sqrt(np.linalg.eigvalsh(h.location_covariance).max()) < config.explore_sd_m:
+                continue  # a pose this well determined has no valley to explore
             C = h.pose_covariance * np.outer(scale, scale)
             vectors = np.linalg.eigh(0.5 * (C + C.T))[1]
             for k in (5, 4):
@@ -504,7 +525,7 @@ class Belief:
         normals: Array,
         inliers: NDArray[np.bool_],
         location: Array,
-        factor: tuple[Array, bool],
+        whitening: Array,
     ) -> tuple[Array, Array, Array]:
         """The pivot, pose covariance (6, 6) and location covariance (3, 3) of a fit: the
         inverse of J^T Sigma^-1 J plus the weak prior, J (n, 6) the residuals' change
@@ -516,7 +537,8 @@ class Belief:
             np.full(3, self.config.prior_rotation_rad**-2),
             np.full(3, self.config.prior_translation_m**-2),
         ]
-        information = J.T @ cho_solve(factor, J) + np.diag(prior)
+        Jw = whitening @ J
+        information = Jw.T @ Jw + np.diag(prior)
         pose = np.linalg.inv(information)
         pose = 0.5 * (pose + pose.T)
         arm = location - pivot
@@ -525,20 +547,19 @@ class Belief:
         return pivot, pose, Jp @ pose @ Jp.T
 
     def _miss_penalty(self, model: MeshModel, R: Array, t: Array) -> float:
-        """Log-likelihood of the touches that met nothing under a pose: each ray along
-        which the model lies within the travel (a contact it predicts but that did not
-        happen) costs the log-odds of a contact missed by ``outlier_sigmas`` noise
-        levels."""
+        """Log-likelihood of the touches that met nothing under a pose: a ray that the
+        posed model's surface crosses within the travel is a contact it predicts but that
+        did not happen; it costs Huber's loss of the deepest point of the ray inside the
+        model, in effective noise levels sqrt(s^2 + m^2) (a surface the ray just grazes
+        costs little, one it runs deep into costs much)."""
         penalty = 0.0
-        level = self.noise.outlier_level_m(self.sensor_m)
+        sigma = float(np.hypot(self.sensor_m, self.noise.model_mismatch_m))
         for start, direction, travel in self.misses:
-            steps = np.arange(0.0, travel - level, 0.1e-3)
-            if steps.size == 0:
-                continue
+            steps = np.arange(0.0, travel + 0.05e-3, 0.1e-3)
             ray = start + steps[:, None] * direction
-            inside = model.distance.signed(ray @ R.T + t) < 0
-            if inside.any():
-                penalty -= 0.5 * self.noise.outlier_sigmas**2
+            deepest = float(model.distance.signed(ray @ R.T + t).min())
+            if deepest < 0:
+                penalty -= float(huber(np.array([deepest / sigma]), self.noise.huber_k)[0])
         return penalty
 
 

@@ -66,8 +66,7 @@ def refine_poses(
         outliers = distance > threshold_m
         if whitening is not None:
             r = np.clip(r, -threshold_m, threshold_m) @ whitening.T
-            J = np.einsum("ij,kjc->kic", whitening, np.where(outliers[..., None], 0.0, J))
-            return r, J
+            return r, np.matmul(whitening, np.where(outliers[..., None], 0.0, J))
         return np.where(outliers, 0.0, r), np.where(outliers[..., None], 0.0, J)
 
     def retract(state: State, step: Array) -> State:
