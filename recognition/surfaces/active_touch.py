@@ -3,7 +3,9 @@
 After the three curves, :func:`verify` repeats: plan the touch of greatest expected
 information gain (:func:`~recognition.surfaces.touch_planning.plan_touch`), make it
 (``touch``: the robot, or a ray cast on a known surface in a benchmark), refine and
-re-score every hypothesis with all the contact (:meth:`Belief.with_contacts`); it stops
+re-score every hypothesis with all the contact (:meth:`Belief.with_contacts`); when no
+hypothesis explains the contact any more, the curves are searched again more broadly
+(once, :meth:`~recognition.surfaces.database.ModelDatabase.broaden`). It stops
 once the best hypothesis's posterior reaches ``confidence``, the touches are spent, or no
 allowed touch can tell the hypotheses apart. A belief that is sure after the curves makes
 no touch.
@@ -23,9 +25,13 @@ from recognition.surfaces.belief import Belief
 from recognition.surfaces.database import ModelDatabase
 from recognition.surfaces.touch_planning import TouchLimits, TouchPlan
 
-__all__ = ["TouchStep", "Verification", "verify"]
+__all__ = ["BROADEN_AT", "TouchStep", "Verification", "verify"]
 
 Array = NDArray[np.float64]
+
+#: When "none of these" is at least this probable, the search is broadened once
+#: (:meth:`~recognition.surfaces.database.ModelDatabase.broaden`) before the next touch.
+BROADEN_AT = 0.5
 
 
 @dataclass(frozen=True)
@@ -67,12 +73,16 @@ class Verification:
         Confidence after the curves alone.
     stop : str
         Why the loop ended: ``"sure"``, ``"touches spent"`` or ``"no informative touch"``.
+    broaden_s : float
+        Time of the broader search (:meth:`ModelDatabase.broaden`) when one ran, seconds
+        (also in the recognition time of the touch it preceded).
     """
 
     belief: Belief
     steps: tuple[TouchStep, ...]
     initial_confidence: float
     stop: str
+    broaden_s: float = 0.0
 
 
 def verify(
@@ -111,6 +121,7 @@ def verify(
     initial = belief.confidence
     steps: list[TouchStep] = []
     stop = "touches spent"
+    broaden_s = 0.0
     for k in range(max_touches + 1):
         if belief.confidence >= confidence:
             stop = "sure"
@@ -118,6 +129,12 @@ def verify(
         if k == max_touches:
             break
         start = time.perf_counter()
+        if belief.unexplained >= BROADEN_AT:
+            belief = database.broaden(belief)
+            broaden_s = time.perf_counter() - start
+            if belief.confidence >= confidence:
+                stop = "sure"
+                break
         plan = database.plan_touch(belief, limits, seed=seed + k)
         planned = time.perf_counter() - start
         if plan is None:
@@ -140,4 +157,4 @@ def verify(
                 belief,
             )
         )
-    return Verification(belief, tuple(steps), initial, stop)
+    return Verification(belief, tuple(steps), initial, stop, broaden_s)

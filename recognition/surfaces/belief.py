@@ -45,6 +45,7 @@ from scipy.special import gammaincinv
 from recognition.errors import InvalidArgument
 from recognition.rigid import cross, pose_matrix, rotation_from_vector
 from recognition.surfaces.closest_fit import refine_poses
+from recognition.surfaces.data_curves import DataCurves
 from recognition.surfaces.mesh_model import MeshModel
 from recognition.surfaces.registration.ambiguity import distinct_poses
 from recognition.surfaces.registration.exact import smooth_normals
@@ -272,6 +273,10 @@ class Belief:
     misses : tuple of (start (3,), direction (3,), travel) per touch that met nothing
     unexplained : float
         Posterior that none of the hypotheses is the truth (module docstring).
+    curves : DataCurves or None
+        The curves the belief started from (a broader search can start again from them).
+    broadened : bool
+        Whether a broader search has added its poses (:meth:`with_poses`).
     """
 
     hypotheses: tuple[Hypothesis, ...]
@@ -283,6 +288,8 @@ class Belief:
     config: BeliefConfig = BeliefConfig()
     misses: tuple[tuple[Array, Array, float], ...] = ()
     unexplained: float = 0.0
+    curves: DataCurves | None = field(default=None, repr=False)
+    broadened: bool = False
 
     @property
     def best(self) -> Hypothesis | None:
@@ -331,11 +338,13 @@ class Belief:
         *,
         noise: NoiseModel = NoiseModel(),
         config: BeliefConfig = BeliefConfig(),
+        curves: DataCurves | None = None,
     ) -> Belief:
         """The belief from candidate poses ``(model, T_model_from_data, error_m)`` (e.g.
         every pose a recognition ended with): those within the configured window of the
         least error, refined on ``points`` (n, 3) and scored. ``point``: the curves'
-        common point p; ``sensor_estimate_m``: the curves' own scatter."""
+        common point p; ``sensor_estimate_m``: the curves' own scatter; ``curves``: the
+        curves themselves (kept for a broader search)."""
         usable = [(n, T, e) for n, T, e in candidates if np.isfinite(e) and n in models]
         points = np.asarray(points, dtype=np.float64)
         belief = cls(
@@ -346,6 +355,7 @@ class Belief:
             noise.sensor_m(sensor_estimate_m),
             noise,
             config,
+            curves=curves,
         )
         if not usable:
             return belief
@@ -371,17 +381,23 @@ class Belief:
             (np.asarray(s, float), np.asarray(d, float) / np.linalg.norm(d), float(t))
             for s, d, t in misses
         ]
-        belief = Belief(
-            (),
-            np.concatenate([self.points, new]),
-            self.n_curve_points,
-            self.point,
-            self.sensor_m,
-            self.noise,
-            self.config,
-            (*self.misses, *moved),
+        belief = replace(
+            self,
+            hypotheses=(),
+            points=np.concatenate([self.points, new]),
+            misses=(*self.misses, *moved),
         )
         return belief._rescored([(h.model, h.T_model_from_data) for h in self.hypotheses], models)
+
+    def with_poses(
+        self, models: Mapping[str, MeshModel], poses: Sequence[tuple[str, Array]]
+    ) -> Belief:
+        """The belief with further candidate poses ``(model, T_model_from_data)`` (a
+        broader search's), refined and scored with its hypotheses on all the contact;
+        marked ``broadened``."""
+        known = [(h.model, h.T_model_from_data) for h in self.hypotheses]
+        usable = [(n, np.asarray(T, float)) for n, T in poses if n in models]
+        return replace(self._rescored([*known, *usable], models), broadened=True)
 
     def _rescored(
         self, hypotheses: Sequence[tuple[str, Array]], models: Mapping[str, MeshModel]
@@ -413,17 +429,7 @@ class Belief:
             for i in order
             if weights[i] >= config.min_posterior or i == order[0]
         )
-        return Belief(
-            kept,
-            self.points,
-            self.n_curve_points,
-            self.point,
-            self.sensor_m,
-            self.noise,
-            config,
-            self.misses,
-            unexplained,
-        )
+        return replace(self, hypotheses=kept, unexplained=unexplained)
 
     def _fitted(
         self,
@@ -451,6 +457,7 @@ class Belief:
                 1e-4,
                 max(self.config.refine_clip_m, level),
                 whitening,
+                self.noise.huber_k,
             )
             moved = np.einsum("nj,kij->kni", self.points, R) + t[:, None, :]
             distance, closest, face = model.distance.closest(moved.reshape(-1, 3))

@@ -27,6 +27,7 @@ def refine_poses(
     tolerance: float,
     threshold_m: float,
     whitening: Array | None = None,
+    huber_k: float = np.inf,
 ) -> tuple[Array, Array, Array]:
     """Poses R (k, 3, 3), t (k, 3) of the points (n, 3) refined on exact closest points
     of a mesh: Levenberg-Marquardt on point-to-plane residuals, each point counted at most
@@ -36,7 +37,8 @@ def refine_poses(
 
     With ``whitening`` W (n, n) (the inverse of a Cholesky factor of the residuals'
     covariance), the signed residuals r (a point beyond the threshold at it) are fitted
-    in the sense of generalised least squares: |W r|^2 (correlated errors)."""
+    in the sense of generalised least squares: |W r|^2 (correlated errors), each whitened
+    residual counted by Huber's loss beyond ``huber_k`` (iteratively reweighted)."""
     reach = float(np.max(np.linalg.norm(points - points.mean(axis=0), axis=1)))
     n = len(points)
 
@@ -54,7 +56,9 @@ def refine_poses(
 
     def cost(state: State) -> Array:
         if whitening is not None:
-            return np.asarray(np.mean((signed(state) @ whitening.T) ** 2, axis=1))
+            z = np.abs(signed(state) @ whitening.T)
+            loss = np.where(z <= huber_k, z * z, 2 * huber_k * z - huber_k**2)
+            return np.asarray(np.mean(loss, axis=1))
         return np.asarray(np.mean(np.minimum(state[3], threshold_m) ** 2, axis=1))
 
     def linearize(state: State) -> tuple[Array, Array]:
@@ -65,8 +69,10 @@ def refine_poses(
         J = np.concatenate([cross(X - c, normals), normals], axis=2)
         outliers = distance > threshold_m
         if whitening is not None:
-            r = np.clip(r, -threshold_m, threshold_m) @ whitening.T
-            return r, np.matmul(whitening, np.where(outliers[..., None], 0.0, J))
+            z = np.clip(r, -threshold_m, threshold_m) @ whitening.T
+            Jz = np.matmul(whitening, np.where(outliers[..., None], 0.0, J))
+            weight = np.sqrt(np.minimum(1.0, huber_k / np.maximum(np.abs(z), 1e-300)))
+            return weight * z, weight[..., None] * Jz
         return np.where(outliers, 0.0, r), np.where(outliers[..., None], 0.0, J)
 
     def retract(state: State, step: Array) -> State:

@@ -19,6 +19,7 @@ from recognition.surfaces.database_files import DATABASE_FORMAT, read_models, wr
 from recognition.surfaces.distance import FieldStack
 from recognition.surfaces.mesh_model import MeshModel, MeshModelConfig
 from recognition.surfaces.registration import (
+    ALIGNED_SEARCH,
     CONFIGS,
     FastConfig,
     IcpConfig,
@@ -233,6 +234,7 @@ class ModelDatabase:
             data_noise_m(curves),
             noise=noise,
             config=belief or BeliefConfig(),
+            curves=curves,
         )
         return replace(result, belief=hypotheses, time_s=time.perf_counter() - start)
 
@@ -246,6 +248,27 @@ class ModelDatabase:
         ``points`` (k, 3) in the curves' frame, metres, and ``misses`` (start, direction,
         travel) that met nothing."""
         return belief.with_contacts(self.models, points, misses)
+
+    def broaden(self, belief: Belief) -> Belief:
+        """``belief`` with the poses of a broader search of its curves added (the fast
+        mode's first fallback pass: candidates over every model's whole surface, more
+        poses kept), once: for when no hypothesis explains the contact
+        (:attr:`Belief.unexplained`). Unchanged without curves, or once broadened."""
+        if belief.curves is None or belief.broadened:
+            return belief
+        config = self.registration if isinstance(self.registration, FastConfig) else FastConfig()
+        wide = replace(config, search=ALIGNED_SEARCH, fallbacks=())
+        geometry = data_geometry(belief.curves, wide.geometry)
+        found = register_all(
+            list(self.models.values()),
+            belief.curves,
+            wide,
+            geometry=geometry,
+            stack=self.field_stack,
+            which_field=np.arange(len(self)),
+        )
+        poses = [(r.model, T) for r in found if not r.rejected for T in r.poses]
+        return belief.with_poses(self.models, poses)
 
     def plan_touch(self, belief: Belief, limits: TouchLimits, seed: int = 0) -> TouchPlan | None:
         """The next touch of greatest expected information gain, or None
