@@ -19,6 +19,7 @@ from recognition.evaluation.records import Record
 
 __all__ = [
     "SURE",
+    "pooled_report",
     "reliability",
     "reliability_figure",
     "touch_summary",
@@ -189,3 +190,70 @@ def reliability_figure(records: Sequence[Record], path: Path) -> None:
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
+
+
+def pooled_report(
+    paths: Sequence[Path], out_dir: Path, name: str, arguments: Sequence[str] = ()
+) -> dict[str, Any]:
+    """The reliability of the fast-mode answers of several records files pooled:
+    ``<name>.md``, ``<name>_reliability.json`` and ``.png`` in ``out_dir``; returns the
+    JSON payload (per file: answers, right and sure; pooled: the diagrams and touches).
+
+    Raises
+    ------
+    InvalidRecords
+        A file holds a line that is not a record.
+    """
+    import time
+
+    from recognition.evaluation.records import read_results
+    from recognition.evaluation.reports import machine
+    from recognition.files import write_json_atomic
+
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    pooled: list[Record] = []
+    files: dict[str, Any] = {}
+    for path in paths:
+        records = [r for r in read_results(path) if r.method == "fast"]
+        pooled += records
+        files[Path(path).name] = {
+            "after_curves": _brief(reliability(records)),
+            "after_touches": _brief(reliability(records, after_touches=True)),
+        }
+    command = "python scripts/calibration.py " + " ".join(arguments)
+    payload: dict[str, Any] = {
+        "command": command,
+        "files": files,
+        "after_curves": reliability(pooled),
+        "after_touches": reliability(pooled, after_touches=True),
+        "touches": touch_summary(pooled),
+    }
+    write_json_atomic(out_dir / f"{name}_reliability.json", payload)
+    figure = out_dir / f"{name}_reliability.png"
+    reliability_figure(pooled, figure)
+    lines = [
+        "# The belief's reliability, pooled over benchmark runs",
+        "",
+        f"Command: `{command}`  ",
+        f"Date: {time.strftime('%Y-%m-%d %H:%M')}; machine: {machine()}.",
+        "",
+        "| records | answers | right after the curves | sure | right among sure | "
+        "right after the touches | sure | right among sure |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for file, row in files.items():
+        a, b = row["after_curves"], row["after_touches"]
+        lines.append(
+            f"| `{file}` | {a['answers']} | {_percent(a['right'])} | {a['sure']} | "
+            f"{_percent(a['sure_right'])} | {_percent(b['right'])} | {b['sure']} | "
+            f"{_percent(b['sure_right'])} |"
+        )
+    text = "\n".join(lines) + "\n\n" + touches_section(pooled, figure.name)
+    (out_dir / f"{name}.md").write_text(text)
+    return payload
+
+
+def _brief(stage: dict[str, Any]) -> dict[str, Any]:
+    """A reliability payload without its bins."""
+    return {k: v for k, v in stage.items() if k != "bins"}
