@@ -312,11 +312,14 @@ def ray_contact(
     rng: np.random.Generator | None = None,
     step_m: float = 0.1e-3,
 ) -> Array | None:
-    """A touch on a known mesh: where the ray ``start`` + s ``direction`` (data frame,
-    0 <= s <= ``travel_m``) first meets the mesh at the pose ``T_model_from_data``, with
-    isotropic Gaussian noise of ``noise_m`` per axis (drawn from ``rng``); None when it
-    meets nothing. The crossing is bracketed on samples ``step_m`` apart and bisected to
-    1e-9 m.
+    """A touch on a known mesh: where a probe moving along ``direction`` through
+    ``start`` (data frame) first enters the mesh at the pose ``T_model_from_data``, at
+    most ``travel_m`` beyond ``start``, with isotropic Gaussian noise of ``noise_m`` per
+    axis (drawn from ``rng``); None when it meets nothing. A start inside the mesh (the
+    surface nearer than predicted) gives the point where the line coming from
+    ``travel_m`` behind it entered, as a probe brought to the start would have met the
+    surface on its way. The entry is bracketed on samples ``step_m`` apart and bisected
+    to 1e-9 m.
     """
     T = np.asarray(T_model_from_data, dtype=np.float64)
     a = np.asarray(start, dtype=np.float64)
@@ -327,12 +330,13 @@ def ray_contact(
         X = (a + s[:, None] * d) @ T[:3, :3].T + T[:3, 3]
         return distance.signed(X)
 
-    s = np.arange(0.0, travel_m + step_m / 2, step_m)
+    s = np.arange(-travel_m, travel_m + step_m / 2, step_m)
     inside = signed(s) <= 0
-    if not inside.any():
+    entries = np.flatnonzero(inside[1:] & ~inside[:-1]) + 1
+    if not entries.size:
         return None
-    first = int(np.argmax(inside))
-    lo, hi = (s[first - 1], s[first]) if first > 0 else (0.0, 0.0)
+    first = int(entries[0])
+    lo, hi = float(s[first - 1]), float(s[first])
     while hi - lo > 1e-9:
         mid = 0.5 * (lo + hi)
         lo, hi = (lo, mid) if signed(np.array([mid]))[0] <= 0 else (mid, hi)

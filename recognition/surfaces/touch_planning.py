@@ -38,6 +38,11 @@ Array = NDArray[np.float64]
 
 #: A predicted miss counts as a contact this far beyond the travel, metres.
 MISS_DEPTH_M = 1.0
+#: A touched part must be at least this thick along the approach, metres.
+THICKNESS_M = 4.0e-3
+#: Touches that outcomes this likely (relative to the likeliest) predict to miss are not
+#: made.
+LIKELY_WEIGHT = 0.05
 #: Hypotheses less probable than this are left out of a touch's outcomes.
 MIN_OUTCOME_WEIGHT = 1e-4
 #: A pose uncertain by more than this along a motion (metres at the data's reach) is
@@ -303,6 +308,11 @@ def plan_touch(
     # occluded approach, no grazing one
     own = predicted_depths(stack, which[:1], poses[:1], starts, directions, limits.depth_m)[0]
     clear = np.abs(own - limits.standoff_m) <= 0.5e-3
+    # no thin parts (an ear, a tail, a fin): beyond the contact the model must stay
+    # thick, or a pose a millimetre off makes the approach pass beside it
+    inner = starts + (limits.standoff_m + THICKNESS_M) * directions
+    inner = inner @ poses[0][:3, :3].T + poses[0][:3, 3]
+    clear &= stack(inner[None], which[:1])[0] <= -0.5 * THICKNESS_M
     if limits.tool_length_m > 0:
         clear &= _tool_clear(stack, which[0], poses[0], starts, directions, own, limits)
     keep = np.flatnonzero(clear)
@@ -314,6 +324,10 @@ def plan_touch(
     depths = predicted_depths(stack, which, poses, starts, directions, limits.depth_m)
     sigma = float(np.hypot(belief.sensor_m, belief.noise.model_mismatch_m))
     gain = information_gain(depths, weights, sigma)
+    # a touch that likely hypotheses predict to meet nothing is a guess at an edge: a
+    # miss pulls no pose, and the slightest error of them all turns a contact into one
+    likely = weights >= LIKELY_WEIGHT * weights.max()
+    gain[np.isnan(depths[likely]).any(axis=0)] = -np.inf
     k = int(np.argmax(gain))
     if not gain[k] > 1e-3:
         return None
