@@ -39,7 +39,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.linalg import cholesky, solve_triangular
+from scipy.linalg import lapack
 from scipy.special import gammaincinv
 
 from recognition.errors import InvalidArgument
@@ -167,6 +167,9 @@ class BeliefConfig:
         slid pose pulls it back, a gross outlier does not pull.
     min_posterior : float
         Hypotheses whose posterior falls below this are dropped after an update.
+    carried_hypotheses, carried_posterior
+        An update refines at most this many of the most probable hypotheses, those of at
+        least this posterior.
     unexplained_p : float
         The alternative "none of these" is as likely as a hypothesis whose whitened
         residuals reach the (1 - ``unexplained_p``) quantile of their chi-square law: the
@@ -190,6 +193,8 @@ class BeliefConfig:
     refine_iterations: int = 4
     refine_clip_m: float = 2.0e-3
     min_posterior: float = 1e-9
+    carried_hypotheses: int = 16
+    carried_posterior: float = 1e-6
     unexplained_p: float = 1e-3
     radius_m: float = 1.0e-3
     explore_hypotheses: int = 3
@@ -387,7 +392,12 @@ class Belief:
             points=np.concatenate([self.points, new]),
             misses=(*self.misses, *moved),
         )
-        return belief._rescored([(h.model, h.T_model_from_data) for h in self.hypotheses], models)
+        chosen = [
+            h
+            for h in self.hypotheses[: self.config.carried_hypotheses]
+            if h.posterior >= self.config.carried_posterior
+        ] or list(self.hypotheses[:1])
+        return belief._rescored([(h.model, h.T_model_from_data) for h in chosen], models)
 
     def with_poses(
         self, models: Mapping[str, MeshModel], poses: Sequence[tuple[str, Array]]
@@ -406,8 +416,10 @@ class Belief:
         points, the valleys of the most probable explored (:meth:`_explored`),
         near-duplicates merged, scored and normalised."""
         config = self.config
-        lower = cholesky(self.noise.covariance(self.points, self.sensor_m), lower=True)
-        whitening = solve_triangular(lower, np.eye(len(lower)), lower=True)
+        lower = np.linalg.cholesky(self.noise.covariance(self.points, self.sensor_m))
+        whitening, info = lapack.dtrtri(lower, lower=1)  # the triangular inverse
+        if info != 0:
+            raise InvalidArgument(f"the residuals' covariance is singular (LAPACK info {info})")
         found = self._fitted(hypotheses, models, whitening)
         if not found:
             return self
