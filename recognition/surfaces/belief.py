@@ -167,9 +167,6 @@ class BeliefConfig:
         slid pose pulls it back, a gross outlier does not pull.
     min_posterior : float
         Hypotheses whose posterior falls below this are dropped after an update.
-    carried_hypotheses, carried_posterior
-        An update refines at most this many of the most probable hypotheses, those of at
-        least this posterior.
     unexplained_p : float
         The alternative "none of these" is as likely as a hypothesis whose whitened
         residuals reach the (1 - ``unexplained_p``) quantile of their chi-square law: the
@@ -193,8 +190,6 @@ class BeliefConfig:
     refine_iterations: int = 4
     refine_clip_m: float = 2.0e-3
     min_posterior: float = 1e-9
-    carried_hypotheses: int = 16
-    carried_posterior: float = 1e-6
     unexplained_p: float = 1e-3
     radius_m: float = 1.0e-3
     explore_hypotheses: int = 3
@@ -392,12 +387,7 @@ class Belief:
             points=np.concatenate([self.points, new]),
             misses=(*self.misses, *moved),
         )
-        chosen = [
-            h
-            for h in self.hypotheses[: self.config.carried_hypotheses]
-            if h.posterior >= self.config.carried_posterior
-        ] or list(self.hypotheses[:1])
-        return belief._rescored([(h.model, h.T_model_from_data) for h in chosen], models)
+        return belief._rescored([(h.model, h.T_model_from_data) for h in self.hypotheses], models)
 
     def with_poses(
         self, models: Mapping[str, MeshModel], poses: Sequence[tuple[str, Array]]
