@@ -64,7 +64,7 @@ def show(s: dict[str, Any]) -> None:
         )
     if "touches" in s:
         t = s["touches"]
-        print(f"confidence after the sweeps: {s['confidence']:.3f}")
+        print(f"confidence after the sweeps: {s['confidence']:.3f} ({s['belief_best']})")
         for k, made in enumerate(t["made"], 1):
             met = "contact" if made["contact"] else "no contact"
             print(

@@ -208,6 +208,9 @@ def probe_run(config: ProbeRunConfig) -> dict[str, Any]:
         },
         "outliers": [int(i) for i in result.outliers],
         "confidence": result.confidence,
+        "belief_best": None
+        if result.belief is None or result.belief.best is None
+        else result.belief.best.model,
     }
     if config.model_error_mm > 0:
         summary["model_error_mm"] = {
