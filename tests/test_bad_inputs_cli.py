@@ -62,6 +62,8 @@ CASES = [
     ("probe", "--units furlong", "argument --units: invalid choice: 'furlong'"),
     ("probe", "--database {tmp}", "is not a saved model database (no manifest.json)"),
     # benchmark_curves.py
+    ("calibration", "runs/no_such_records.jsonl", "records file runs/no_such_records.jsonl"),
+    ("calibration", "{records} --out-dir {tmp}", "{records}, line 2"),
     ("benchmark_curves", "--curves 0", "argument --curves: expected an integer >= 1, got 0"),
     ("benchmark_curves", "--contacts 2", "argument --contacts: expected an integer >= 3, got 2"),
     ("benchmark_curves", "--precision -1", "argument --precision: expected a finite number"),
