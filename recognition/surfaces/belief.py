@@ -17,7 +17,7 @@ simulator's ``--model-error-mm`` draws such a field). Correlated residuals carry
 evidence than as many independent ones, so the mismatch keeps near-equal fits from
 looking certain. The Matern 3/2 field is once differentiable: a squared-exponential
 kernel (infinitely smooth) calls micrometre roughness of the residuals impossible and
-made the true model of a mismatched object look thousands of log-units worse than it
+made the true model of a mismatched object look hundreds of log-units worse than it
 is. Each residual is clipped at ``outlier_sigmas`` effective noise levels (a gross outlier
 counts alike under every hypothesis, and is reported). With a uniform prior over the
 hypotheses, the posterior of h is proportional to exp(-r_h^T Sigma^-1 r_h / 2) (its whitened
