@@ -50,13 +50,23 @@ from recognition.surfaces.mesh_model import MeshModel
 from recognition.surfaces.registration.ambiguity import distinct_poses
 from recognition.surfaces.registration.exact import smooth_normals
 
-__all__ = ["Belief", "BeliefConfig", "Hypothesis", "NoiseModel"]
+__all__ = ["Belief", "BeliefConfig", "Hypothesis", "NoiseModel", "curve_points"]
 
 Array = NDArray[np.float64]
 
 #: Fixed standard normal samples: the probability that a location lies within a radius
 #: is the fraction of these, scaled by its covariance, that do (same belief, same value).
 _NORMAL_SAMPLES = np.random.default_rng(0).standard_normal((4096, 3))
+
+
+def curve_points(curves: DataCurves, per_curve: int) -> Array:
+    """The curves' points, at most ``per_curve`` of each curve, evenly spaced along it
+    (both ends kept), (k, 3) metres."""
+    chosen = []
+    for c in curves.curves:
+        index = np.unique(np.round(np.linspace(0, len(c) - 1, min(per_curve, len(c)))))
+        chosen.append(c[index.astype(np.int64)])
+    return np.concatenate(chosen)
 
 
 def huber(z: Array, k: float) -> Array:
@@ -175,6 +185,10 @@ class BeliefConfig:
     radius_m : float
         An answer is right when it names the right model and puts p within this of the
         truth (the confidence's sense), metres.
+    points_per_curve : int
+        Longer curves are scored on this many of their points, evenly spaced
+        (:func:`curve_points`): denser points add little once neighbours' mismatch
+        correlates, and every update solves with their covariance.
     explore_hypotheses, explore_log_gap, explore_sd_m, explore_steps_m
         The valleys of the most probable hypotheses whose p is uncertain by more than
         ``explore_sd_m`` (standard deviation along its least determined direction)
@@ -192,6 +206,7 @@ class BeliefConfig:
     min_posterior: float = 1e-9
     unexplained_p: float = 1e-3
     radius_m: float = 1.0e-3
+    points_per_curve: int = 41
     explore_hypotheses: int = 3
     explore_sd_m: float = 0.2e-3
     explore_log_gap: float = 10.0
@@ -261,7 +276,8 @@ class Belief:
     hypotheses : tuple of Hypothesis
         Most probable first.
     points : (n, 3) float
-        Every contact point, data frame, metres: the curves' points, then the touches.
+        Every contact point, data frame, metres: the curves' points (at most
+        ``config.points_per_curve`` of each, :func:`curve_points`), then the touches.
     n_curve_points : int
         How many of ``points`` are the curves'.
     point : (3,) float

@@ -13,7 +13,7 @@ import numpy as np
 import trimesh
 
 from recognition.errors import InvalidArgument, InvalidCurveData, InvalidModel
-from recognition.surfaces.belief import Belief, BeliefConfig, NoiseModel
+from recognition.surfaces.belief import Belief, BeliefConfig, NoiseModel, curve_points
 from recognition.surfaces.data_curves import DataCurves
 from recognition.surfaces.database_files import DATABASE_FORMAT, read_models, write_models
 from recognition.surfaces.distance import FieldStack
@@ -226,14 +226,15 @@ class ModelDatabase:
                 strict=True,
             )
         ]
+        settings = belief or BeliefConfig()
         hypotheses = Belief.of(
             self.models,
             candidates,
-            curves.points,
+            curve_points(curves, settings.points_per_curve),
             geometry.point,
             data_noise_m(curves),
             noise=noise,
-            config=belief or BeliefConfig(),
+            config=settings,
             curves=curves,
         )
         return replace(result, belief=hypotheses, time_s=time.perf_counter() - start)
