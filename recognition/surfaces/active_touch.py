@@ -5,10 +5,10 @@ information gain (:func:`~recognition.surfaces.touch_planning.plan_touch`), make
 (``touch``: the robot, or a ray cast on a known surface in a benchmark), refine and
 re-score every hypothesis with all the contact (:meth:`Belief.with_contacts`); when no
 hypothesis explains the contact any more, the curves are searched again more broadly
-(once, :meth:`~recognition.surfaces.database.ModelDatabase.broaden`). It stops
-once the best hypothesis's posterior reaches ``confidence``, the touches are spent, or no
-allowed touch can tell the hypotheses apart. A belief that is sure after the curves makes
-no touch.
+(once, :meth:`~recognition.surfaces.database.ModelDatabase.broaden`). It stops once the
+belief's confidence (:attr:`Belief.confidence`) reaches ``confidence``, the touches are
+spent, or no allowed touch can tell the hypotheses apart. A belief that is sure after the
+curves makes no touch.
 """
 
 from __future__ import annotations
@@ -110,7 +110,7 @@ def verify(
     max_touches : int
         At most this many touches (0: none, the thesis's behaviour).
     confidence : float
-        Stop once the best hypothesis's posterior reaches this.
+        Stop once the belief's confidence (:attr:`Belief.confidence`) reaches this.
     seed : int
         Seeds the candidate touches (same seed, same plans).
     """

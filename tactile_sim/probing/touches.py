@@ -162,7 +162,7 @@ def touch_until_sure(
     max_touches : int
         At most this many touches (0: the thesis's three curves alone).
     confidence : float
-        Stop once the best hypothesis's posterior reaches this.
+        Stop once the belief's confidence (:attr:`Belief.confidence`) reaches this.
     registration, noise, belief
         Passed to :meth:`ModelDatabase.recognize`.
     recognition : Recognition, optional

@@ -67,7 +67,8 @@ class Recognition:
 
     @property
     def confidence(self) -> float:
-        """Posterior probability of the most probable hypothesis (NaN without a belief)."""
+        """The belief's confidence that its best hypothesis is right: its model, with p
+        within 1 mm (:attr:`Belief.confidence`; NaN without a belief)."""
         return float("nan") if self.belief is None else self.belief.confidence
 
     @property
