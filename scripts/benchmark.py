@@ -39,14 +39,7 @@ from tactile_sim.probing import MAX_SPACING_M
 
 #: Options of one source only, by source (given with the other, they are an error).
 _SOURCE_OPTIONS = {
-    "synthetic": (
-        "per_model",
-        "n_points",
-        "spacing_mm",
-        "plane_angle",
-        "noise_mm",
-        "sweep",
-    ),
+    "synthetic": ("per_model", "n_points", "spacing_mm", "plane_angle", "noise_mm", "sweep"),
     "sim": (
         "experiment",
         "sessions",
@@ -107,9 +100,7 @@ def parse_args(argv: list[str] | None = None) -> BenchmarkConfig:
         "--touches",
         type=integer(0),
         default=defaults.methods.touches,
-        help="verification touches after the curves, at most, until the answer's "
-        "confidence reaches 0.99 (fast mode; synthetic: ray casts on the true model, sim: "
-        "the robot; default 0)",
+        help="verification touches after the curves, at most (fast mode; default 0)",
     )
     p.add_argument(
         "--workers",
