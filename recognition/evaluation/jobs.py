@@ -124,8 +124,7 @@ def _answer_error_mm(
     best = None if belief is None else belief.best
     if best is None or best.model != true_model or point_in_model is None:
         return None
-    images = best.location_images if len(best.location_images) else best.location[None]
-    return float(np.linalg.norm(images - point_in_model, axis=1).min() * 1e3)
+    return best.location_error_m(point_in_model) * 1e3
 
 
 def _touched(

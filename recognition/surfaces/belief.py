@@ -98,7 +98,7 @@ class NoiseModel:
     model_mismatch_m : float
         RMS of the object's difference from its model along the normals, metres.
     correlation_m : float
-        Correlation length of that difference, metres (squared-exponential).
+        Correlation length of that difference, metres (Matern 3/2).
     outlier_sigmas : float
         A residual beyond this many effective noise levels sqrt(s^2 + m^2) counts at that
         level and makes the point an outlier of the hypothesis.
@@ -151,12 +151,13 @@ class NoiseModel:
         Cholesky factor: -sum of :func:`huber` at ``huber_k``."""
         return -float(np.sum(huber(whitened, self.huber_k)))
 
+    def point_sigma_m(self, sensor_m: float) -> float:
+        """One contact point's effective noise sqrt(s^2 + m^2), metres."""
+        return float(np.hypot(sensor_m, self.model_mismatch_m))
+
     def outlier_level_m(self, sensor_m: float) -> float:
         """Residual level beyond which a point is an outlier, metres."""
-        return max(
-            self.outlier_sigmas * float(np.hypot(sensor_m, self.model_mismatch_m)),
-            self.outlier_floor_m,
-        )
+        return max(self.outlier_sigmas * self.point_sigma_m(sensor_m), self.outlier_floor_m)
 
 
 @dataclass(frozen=True)
@@ -229,7 +230,8 @@ class Hypothesis:
         Mean distance of all contact points from the model (4.8), outliers at the
         outlier level, metres.
     log_likelihood : float
-        -r^T Sigma^-1 r / 2 of the clipped residuals (module docstring).
+        Of the clipped residuals whitened by Sigma, each counted by Huber's loss, and of
+        the misses (:meth:`Belief._miss_penalty`); up to a constant (module docstring).
     posterior : float
     outliers : (k,) int
         Indices (into :attr:`Belief.points`) of the points beyond the outlier level.
@@ -258,6 +260,15 @@ class Hypothesis:
     pose_covariance: Array = field(default_factory=lambda: np.zeros((6, 6)))
     location_covariance: Array = field(default_factory=lambda: np.zeros((3, 3)))
     location_images: Array = field(default_factory=lambda: np.zeros((0, 3)))
+
+    def nearest_location(self, point: Array) -> Array:
+        """Of ``location`` and its symmetric images, the one nearest ``point`` (3,)."""
+        images = self.location_images if len(self.location_images) else self.location[None]
+        return np.asarray(images[int(np.argmin(np.linalg.norm(images - point, axis=1)))])
+
+    def location_error_m(self, point: Array) -> float:
+        """Distance of p from ``point`` (3,), model frame, up to the model's symmetries."""
+        return float(np.linalg.norm(self.nearest_location(point) - point))
 
     def moved(self, motion: Array) -> Array:
         """T_model_from_data after the small motion (turn, shift) (6,) about ``pivot``."""
@@ -323,25 +334,11 @@ class Belief:
         total = 0.0
         for h in self.hypotheses:
             if h.model == best.model:
-                images = h.location_images if len(h.location_images) else h.location[None]
-                gaps = np.linalg.norm(images - best.location, axis=1)
-                offset = images[int(np.argmin(gaps))] - best.location
+                offset = h.nearest_location(best.location) - best.location
                 total += h.posterior * within_probability(
                     offset, h.location_covariance, self.config.radius_m
                 )
         return float(min(total, 1.0))
-
-    @property
-    def n_touches(self) -> int:
-        """Touches made so far: contacts beyond the curves, and misses."""
-        return len(self.points) - self.n_curve_points + len(self.misses)
-
-    def model_posteriors(self) -> dict[str, float]:
-        """Posterior of each model: the sum over its hypotheses."""
-        out: dict[str, float] = {}
-        for h in self.hypotheses:
-            out[h.model] = out.get(h.model, 0.0) + h.posterior
-        return out
 
     @classmethod
     def of(
@@ -478,10 +475,8 @@ class Belief:
                 self.noise.huber_k,
             )
             moved = np.einsum("nj,kij->kni", self.points, R) + t[:, None, :]
-            distance, closest, face = model.distance.closest(moved.reshape(-1, 3))
-            normals = model.distance.face_normals[face].reshape(moved.shape)
-            side = np.einsum("kni,kni->kn", moved - closest.reshape(moved.shape), normals)
-            signed = np.where(side < 0, -1.0, 1.0) * distance.reshape(len(R), -1)
+            flat, closest, face = model.distance.signed_closest(moved.reshape(-1, 3))
+            signed = flat.reshape(len(R), -1)
             errors = np.mean(np.minimum(np.abs(signed), level), axis=1)
             for k in range(len(R)):
                 r = np.clip(signed[k], -level, level)
@@ -525,24 +520,30 @@ class Belief:
         config = self.config
         best = max(h.log_likelihood for h in found)
         top = sorted(found, key=lambda h: -h.log_likelihood)[: config.explore_hypotheses]
-        reach = max(float(np.max(np.linalg.norm(self.points - self.point, axis=1))), 1e-3)
-        scale = np.r_[np.full(3, reach), np.ones(3)]
         starts: list[tuple[str, Array]] = []
         for h in top:
             if h.log_likelihood < best - config.explore_log_gap:
                 continue
             if np.sqrt(np.linalg.eigvalsh(h.location_covariance).max()) < config.explore_sd_m:
                 continue  # a pose this well determined has no valley to explore
-            C = h.pose_covariance * np.outer(scale, scale)
-            vectors = np.linalg.eigh(0.5 * (C + C.T))[1]
-            for k in (5, 4):
-                direction = vectors[:, k] / scale
+            for _, direction in self.loose_motions(h):
                 for step in config.explore_steps_m:
                     starts += [
                         (h.model, h.moved(step * direction)),
                         (h.model, h.moved(-step * direction)),
                     ]
         return starts
+
+    def loose_motions(self, h: Hypothesis) -> list[tuple[float, Array]]:
+        """The two least determined motions of ``h``'s pose, least determined first: the
+        standard deviation along each (metres, a turn counted by how far it moves the
+        data's farthest point from p) and the unit motion (turn (rad), shift (m)) (6,)
+        per metre of it."""
+        reach = max(float(np.max(np.linalg.norm(self.points - self.point, axis=1))), 1e-3)
+        scale = np.r_[np.full(3, reach), np.ones(3)]
+        C = h.pose_covariance * np.outer(scale, scale)
+        values, vectors = np.linalg.eigh(0.5 * (C + C.T))
+        return [(float(np.sqrt(max(values[k], 0.0))), vectors[:, k] / scale) for k in (5, 4)]
 
     def _laplace(
         self,
@@ -578,7 +579,7 @@ class Belief:
         model, in effective noise levels sqrt(s^2 + m^2) (a surface the ray just grazes
         costs little, one it runs deep into costs much)."""
         penalty = 0.0
-        sigma = float(np.hypot(self.sensor_m, self.noise.model_mismatch_m))
+        sigma = self.noise.point_sigma_m(self.sensor_m)
         for start, direction, travel in self.misses:
             steps = np.arange(0.0, travel + 0.05e-3, 0.1e-3)
             ray = start + steps[:, None] * direction

@@ -93,11 +93,16 @@ class MeshDistance:
         (m,) float
             Signed distance, metres.
         """
+        return self.signed_closest(points)[0]
+
+    def signed_closest(self, points: ArrayLike) -> tuple[Array, Array, IntArray]:
+        """Signed distance (m,), closest point (m, 3) and face (m,) of each point (m, 3):
+        :meth:`signed` with what it found on the way."""
         d, q, f = self.closest(points)
         side = np.einsum(
             "ij,ij->i", np.asarray(points, float).reshape(-1, 3) - q, self.face_normals[f]
         )
-        return np.where(side < 0, -d, d)
+        return np.where(side < 0, -d, d), q, f
 
 
 @dataclass(frozen=True)

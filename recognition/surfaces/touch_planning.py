@@ -253,20 +253,15 @@ def _outcomes(belief: Belief) -> tuple[list[str], Array, Array]:
     names: list[str] = []
     poses: list[Array] = []
     weights: list[float] = []
-    reach = max(float(np.max(np.linalg.norm(belief.points - belief.point, axis=1))), 1e-3)
-    scale = np.r_[np.full(3, reach), np.ones(3)]
     for h in belief.hypotheses:
         if h.posterior < MIN_OUTCOME_WEIGHT and poses:
             continue
         own = [h.T_model_from_data]
         if h.posterior >= 0.001:
-            C = h.pose_covariance * np.outer(scale, scale)
-            values, vectors = np.linalg.eigh(0.5 * (C + C.T))
-            for k in (5, 4):
-                sd = float(np.sqrt(max(values[k], 0.0)))
+            for sd, direction in belief.loose_motions(h):
                 if sd < SIGMA_FLOOR_M:
                     break
-                motion = SIGMA_SCALE * sd * vectors[:, k] / scale
+                motion = SIGMA_SCALE * sd * direction
                 own += [h.moved(motion), h.moved(-motion)]
         names += [h.model] * len(own)
         poses += own
@@ -321,8 +316,9 @@ def plan_touch(
     if keep.size > limits.scored:
         keep = np.sort(rng.choice(keep, size=limits.scored, replace=False))
     P, directions, starts = P[keep], directions[keep], starts[keep]
-    depths = predicted_depths(stack, which, poses, starts, directions, limits.depth_m)
-    sigma = float(np.hypot(belief.sensor_m, belief.noise.model_mismatch_m))
+    others = predicted_depths(stack, which[1:], poses[1:], starts, directions, limits.depth_m)
+    depths = np.concatenate([own[None, keep], others])
+    sigma = belief.noise.point_sigma_m(belief.sensor_m)
     gain = information_gain(depths, weights, sigma)
     # a touch that likely hypotheses predict to meet nothing is a guess at an edge: a
     # miss pulls no pose, and the slightest error of them all turns a contact into one

@@ -274,10 +274,7 @@ def _touch_summary(touched: Any, name: str, point_in_object: np.ndarray) -> dict
         "confidence": belief.confidence,
     }
     if best is not None and best.model == name:
-        images = best.location_images if len(best.location_images) else best.location[None]
-        out["location_error_mm"] = float(
-            np.linalg.norm(images - point_in_object, axis=1).min() * 1e3
-        )
+        out["location_error_mm"] = best.location_error_m(point_in_object) * 1e3
     return out
 
 
