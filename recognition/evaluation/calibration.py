@@ -9,13 +9,16 @@ right; the expected calibration error (ECE) is the mean gap, weighted by the bin
 
 from __future__ import annotations
 
+import time
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from recognition.evaluation.records import Record
+from recognition.evaluation.records import Record, read_results
+from recognition.evaluation.reports import machine
+from recognition.files import write_json_atomic
 
 __all__ = [
     "SURE",
@@ -163,9 +166,9 @@ def touches_section(records: Sequence[Record], figure_name: str | None = None) -
 
 def reliability_figure(records: Sequence[Record], path: Path) -> None:
     """PNG: the reliability diagram after the curves (and after the touches, if made)."""
-    from recognition.evaluation.figures import _pyplot
+    from recognition.evaluation.figures import pyplot
 
-    plt = _pyplot()
+    plt = pyplot()
     fig, ax = plt.subplots(figsize=(4.6, 4.2))
     ax.plot([0, 1], [0, 1], color="0.7", lw=1, label="calibrated")
     stages = [("after the curves", reliability(records), "o-")]
@@ -204,12 +207,6 @@ def pooled_report(
     InvalidRecords
         A file holds a line that is not a record.
     """
-    import time
-
-    from recognition.evaluation.records import read_results
-    from recognition.evaluation.reports import machine
-    from recognition.files import write_json_atomic
-
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     pooled: list[Record] = []

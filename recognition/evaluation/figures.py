@@ -16,10 +16,11 @@ from recognition.evaluation.records import Record
 from recognition.evaluation.reports import finite_errors, first_instances
 from recognition.evaluation.summary import MethodSummary
 
-__all__ = ["catalog_sessions_figure", "solids_figure", "sweep_figure"]
+__all__ = ["catalog_sessions_figure", "pyplot", "solids_figure", "sweep_figure"]
 
 
-def _pyplot() -> Any:
+def pyplot() -> Any:
+    """matplotlib.pyplot with the Agg backend (imported on first use)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -32,7 +33,7 @@ def sweep_figure(
     results: Mapping[float, MethodSummary], parameter: str, figure: str, path: Path
 ) -> None:
     """Success rate and median time against the swept ``parameter`` (thesis ``figure``)."""
-    plt = _pyplot()
+    plt = pyplot()
     fig, ax = plt.subplots(1, 2, figsize=(9, 3.5))
     xs = list(results)
     ax[0].plot(xs, [100 * results[v].success_rate for v in xs], "o-")
@@ -70,7 +71,7 @@ def _error_image(ax: Any, first: Mapping[str, Record], names: Sequence[str], tit
 def catalog_sessions_figure(records: Sequence[Record], names: Sequence[str], path: Path) -> None:
     """Registration errors of session 0 of each object (Table 4.6 analogue) and the
     localisation error of every session, from the data and the reference points."""
-    plt = _pyplot()
+    plt = pyplot()
     method = "fast" if any(r.method == "fast" for r in records) else records[0].method
     rs = sorted((r for r in records if r.method == method), key=lambda r: (r.model, r.index))
     first = first_instances(rs, method)
@@ -95,7 +96,7 @@ def catalog_sessions_figure(records: Sequence[Record], names: Sequence[str], pat
 
 def solids_figure(records: Sequence[Record], names: Sequence[str], path: Path) -> None:
     """Least registration errors of session 0 of each Fig. 4.15 solid (Table 4.5 analogue)."""
-    plt = _pyplot()
+    plt = pyplot()
     first = first_instances(records, CLOSED_FORM_METHOD)
     fig, ax = plt.subplots(figsize=(6, 5))
     image = _error_image(ax, first, names, "log10 minimum registration error mm (session 0)")

@@ -129,7 +129,7 @@ def verify(
         if k == max_touches:
             break
         start = time.perf_counter()
-        if belief.unexplained >= BROADEN_AT:
+        if belief.unexplained >= BROADEN_AT and not belief.broadened:
             belief = database.broaden(belief)
             broaden_s = time.perf_counter() - start
             if belief.confidence >= confidence:

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -113,32 +113,27 @@ class TouchSession:
 def touch_limits(session: ProbeSession) -> TouchLimits:
     """The touches the session's robot can make: world frame (the curves' frame), the
     stylus's tilt limit, clear of the table, both ends of the approach reachable."""
-    robot = session.runner.rig.sensor.robot if session.runner is not None else None
+    robot = session.runner.rig.sensor.robot if session.runner is not None else COBRA600
+    limits = TouchLimits(
+        up=np.array([0.0, 0.0, 1.0]),
+        max_tilt_rad=math.radians(TOUCH_TILT_DEG),
+        min_height_m=TABLE_CLEARANCE_M,
+        tip_radius_m=robot.probe.tip_radius_m,
+        tool_radius_m=STYLUS_RADIUS_M,
+        tool_length_m=STYLUS_CHECK_LENGTH_M,
+    )
 
     def reachable(starts: Array, directions: Array) -> NDArray[np.bool_]:
         ok = np.ones(len(starts), bool)
         for k, (start, direction) in enumerate(zip(starts, directions, strict=True)):
             try:
                 for point in (start, start + limits.depth_m * direction):
-                    if robot is None:
-                        inverse_kinematics(point)
-                    else:
-                        inverse_kinematics(point, robot=robot)
+                    inverse_kinematics(point, robot=robot)
             except UnreachablePoint:
                 ok[k] = False
         return ok
 
-    probe = (robot or COBRA600).probe
-    limits = TouchLimits(
-        up=np.array([0.0, 0.0, 1.0]),
-        max_tilt_rad=math.radians(TOUCH_TILT_DEG),
-        min_height_m=TABLE_CLEARANCE_M,
-        reachable=reachable,
-        tip_radius_m=probe.tip_radius_m,
-        tool_radius_m=STYLUS_RADIUS_M,
-        tool_length_m=STYLUS_CHECK_LENGTH_M,
-    )
-    return limits
+    return replace(limits, reachable=reachable)
 
 
 def touch_until_sure(
