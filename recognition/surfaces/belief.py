@@ -478,6 +478,7 @@ class Belief:
             flat, closest, face = model.distance.signed_closest(moved.reshape(-1, 3))
             signed = flat.reshape(len(R), -1)
             errors = np.mean(np.minimum(np.abs(signed), level), axis=1)
+            symmetries = model.symmetries
             for k in range(len(R)):
                 r = np.clip(signed[k], -level, level)
                 log_likelihood = self.noise.log_likelihood(whitening @ r)
@@ -500,11 +501,8 @@ class Belief:
                         pivot,
                         pose_cov,
                         location_cov,
-                        np.concatenate(
-                            [
-                                location[None],
-                                model.symmetries[:, :3, :3] @ location + model.symmetries[:, :3, 3],
-                            ]
+                        np.vstack(
+                            [location, symmetries[:, :3, :3] @ location + symmetries[:, :3, 3]]
                         ),
                     )
                 )
