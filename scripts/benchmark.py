@@ -39,7 +39,16 @@ from tactile_sim.probing import MAX_SPACING_M
 
 #: Options of one source only, by source (given with the other, they are an error).
 _SOURCE_OPTIONS = {
-    "synthetic": ("per_model", "n_points", "spacing_mm", "plane_angle", "noise_mm", "sweep"),
+    "synthetic": (
+        "per_model",
+        "n_points",
+        "spacing_mm",
+        "plane_angle",
+        "noise_mm",
+        "sweep",
+        "database_size",
+        "per_generated",
+    ),
     "sim": (
         "experiment",
         "sessions",
@@ -118,6 +127,16 @@ def parse_args(argv: list[str] | None = None) -> BenchmarkConfig:
         help="with --mesh-dir: recognise against the catalog's models as well",
     )
     p.add_argument("--sweep", choices=tuple(SWEEPS))
+    p.add_argument(
+        "--database-size",
+        type=integer(1),
+        help="models: the catalog's, then generated ones (built once, cached)",
+    )
+    p.add_argument(
+        "--per-generated",
+        type=integer(1),
+        help=f"instances per generated model ({syn.per_generated})",
+    )
     p.add_argument("--results", type=Path, help="JSONL of per-instance records")
     p.add_argument("--json", type=Path, dest="json_path", help="summary per method")
     p.add_argument(
@@ -177,6 +196,8 @@ def parse_args(argv: list[str] | None = None) -> BenchmarkConfig:
         p.error(f"--mesh-dir {a.mesh_dir} is not a directory")
     if a.with_catalog and a.mesh_dir is None:
         p.error("--with-catalog applies to --mesh-dir")
+    if a.mesh_dir is not None and (a.database_size or a.sweep == "database-size"):
+        p.error("--mesh-dir and a database of generated models exclude each other")
     if a.ray_address is not None:
         if a.backend != "ray":
             p.error("--ray-address applies to --backend ray only")
@@ -205,6 +226,8 @@ def parse_args(argv: list[str] | None = None) -> BenchmarkConfig:
             plane_angle_deg=given("plane_angle", syn.plane_angle_deg),
             noise_mm=given("noise_mm", syn.noise_mm),
             seed=a.seed,
+            per_generated=given("per_generated", syn.per_generated),
+            database_size=a.database_size,
         ),
         methods=MethodSettings(
             methods=tuple(dict.fromkeys(a.method)) if a.method else METHODS,

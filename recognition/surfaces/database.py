@@ -21,6 +21,7 @@ from recognition.surfaces.mesh_model import MeshModel, MeshModelConfig
 from recognition.surfaces.registration import (
     ALIGNED_SEARCH,
     CONFIGS,
+    CandidateIndex,
     FastConfig,
     IcpConfig,
     Recognition,
@@ -74,6 +75,7 @@ class ModelDatabase:
         #: Where the database was loaded from (None if built in memory).
         self.directory: Path | None = None
         self._stack: FieldStack | None = None
+        self._index: CandidateIndex | None = None
 
     @property
     def names(self) -> list[str]:
@@ -89,6 +91,7 @@ class ModelDatabase:
             model.candidate_curvatures  # noqa: B018
             model.symmetries  # noqa: B018
         self.field_stack  # noqa: B018
+        self.candidate_index  # noqa: B018
         return self
 
     @property
@@ -97,6 +100,14 @@ class ModelDatabase:
         if self._stack is None:
             self._stack = FieldStack.of([m.distance_field for m in self.models.values()])
         return self._stack
+
+    @property
+    def candidate_index(self) -> CandidateIndex:
+        """Every model's candidate map and ring descriptors in one table, owners in
+        :attr:`names` order (cached): the fast mode ranks candidates across the database."""
+        if self._index is None:
+            self._index = CandidateIndex.of(list(self.models.values()))
+        return self._index
 
     def __len__(self) -> int:
         return len(self.models)
@@ -125,6 +136,7 @@ class ModelDatabase:
             model.table  # noqa: B018 - build now, not at the first recognition
             model.candidate_curvatures  # noqa: B018
             model.distance_field  # noqa: B018
+            model.rings  # noqa: B018
             models[name] = model
         return cls(models, registration).prepare()
 
@@ -208,6 +220,7 @@ class ModelDatabase:
                 geometry=geometry,
                 stack=self.field_stack,
                 which_field=np.array([index[n] for n in names]),
+                index=self.candidate_index,
             )
         else:
             found = register_all(chosen, curves, config, geometry=geometry, threads=self.threads)
@@ -267,6 +280,7 @@ class ModelDatabase:
             geometry=geometry,
             stack=self.field_stack,
             which_field=np.arange(len(self)),
+            index=self.candidate_index,
         )
         poses = [(r.model, T) for r in found if not r.rejected for T in r.poses]
         return belief.with_poses(self.models, poses)

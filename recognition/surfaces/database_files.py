@@ -29,11 +29,12 @@ from recognition.surfaces.distance import DistanceField
 from recognition.surfaces.lookup import CurvatureTable
 from recognition.surfaces.mesh_model import MeshModel, MeshModelConfig
 from recognition.surfaces.mesh_repair import MeshReport
+from recognition.surfaces.rings import RADII_M
 
 __all__ = ["DATABASE_FORMAT", "MANIFEST", "read_models", "write_models"]
 
 #: Version of the on-disk format; a different version is rebuilt, never read.
-DATABASE_FORMAT = 8
+DATABASE_FORMAT = 9
 #: The manifest's file name.
 MANIFEST = "manifest.json"
 
@@ -55,6 +56,7 @@ _ARRAYS = (
     "field_band",
     "field_values",
     "symmetries",
+    "rings",
 )
 
 
@@ -92,6 +94,7 @@ def _arrays(model: MeshModel) -> dict[str, np.ndarray]:
         "field_band": np.array(df.band),
         "field_values": df.values,
         "symmetries": model.symmetries,
+        "rings": model.rings,
     }
 
 
@@ -217,8 +220,15 @@ def _check_arrays(a: dict[str, np.ndarray], label: str) -> None:
         for part in ("k1", "k2", "d1"):
             if len(a[f"{table}_{part}"]) != size:
                 fail(f"{table}_{part} has {len(a[f'{table}_{part}'])} rows, expected {size}")
+    rings = a["rings"]
+    if rings.ndim != 3 or rings.shape[0] != len(a["vertex_index"]) or rings.dtype.kind != "f":
+        fail(f"rings must be a float ({len(a['vertex_index'])}, k, 2) array, got {rings.shape}")
+    if rings.shape[1:] != (len(RADII_M), 2):
+        fail(f"rings hold {rings.shape[1:]} invariants per vertex, expected {(len(RADII_M), 2)}")
+    if np.isinf(rings).any():
+        fail("rings hold infinite values")
     for key in _ARRAYS[1:]:
-        if a[key].dtype.kind == "f" and not np.all(np.isfinite(a[key])):
+        if key != "rings" and a[key].dtype.kind == "f" and not np.all(np.isfinite(a[key])):
             fail(f"{key} holds NaN or infinite values")
     if a["field_values"].ndim != 3 or a["field_origin"].shape != (3,):
         fail("the distance field must be a 3-D grid with a (3,) origin")
@@ -284,6 +294,7 @@ def read_models(directory: Path, config: MeshModelConfig | None = None) -> list[
             normals=a["normals"],
             report=report,
             symmetries=a["symmetries"],
+            rings=a["rings"],
         )
         if model.hash != entry.get("mesh_hash"):
             raise InvalidModel(

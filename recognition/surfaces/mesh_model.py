@@ -25,6 +25,7 @@ from scipy.spatial import cKDTree
 from recognition.surfaces.distance import DistanceField, MeshDistance
 from recognition.surfaces.lookup import CurvatureTable
 from recognition.surfaces.mesh_repair import MeshReport, prepare_mesh
+from recognition.surfaces.rings import model_ring_descriptors
 from recognition.surfaces.symmetry import rotational_symmetries
 
 __all__ = [
@@ -37,6 +38,7 @@ __all__ = [
 ]
 
 Array = NDArray[np.float64]
+Array32 = NDArray[np.float32]
 IntArray = NDArray[np.int64]
 
 #: Neighbours of the single paraboloid fit at each candidate vertex of the fast mode
@@ -358,6 +360,8 @@ class MeshModel:
         What preparing the mesh did (with ``validate=False``: as recorded then).
     symmetries : (k, 4, 4) float, optional
         The rotational symmetries found earlier (see :attr:`symmetries`).
+    rings : (m, k, 2) float32, optional
+        The candidate map's ring descriptors computed earlier (see :attr:`rings`).
 
     Attributes
     ----------
@@ -377,6 +381,7 @@ class MeshModel:
         normals: ArrayLike | None = None,
         report: MeshReport | None = None,
         symmetries: ArrayLike | None = None,
+        rings: ArrayLike | None = None,
     ) -> None:
         self.name = name
         self.config = config
@@ -396,6 +401,7 @@ class MeshModel:
         self._field = distance_field
         self._distance: MeshDistance | None = None
         self._symmetries = None if symmetries is None else np.asarray(symmetries, float)
+        self._rings = None if rings is None else np.asarray(rings, np.float32)
         self._tree: cKDTree | None = None
         self._cell_keys: dict[float, IntArray] = {}
         self.timings: dict[str, float] = {}
@@ -444,6 +450,20 @@ class MeshModel:
             self._dense = CurvatureTable(vertices, k1, k2, d1)
             self.timings["vertex_curvatures_s"] = time.perf_counter() - start
         return self._dense
+
+    @property
+    def rings(self) -> Array32:
+        """(m, len(RADII_M), 2) float32 ring descriptors at the candidate map's vertices,
+        in its row order (:mod:`~recognition.surfaces.rings`; computed on first use)."""
+        if self._rings is None:
+            start = time.perf_counter()
+            dense = self.candidate_curvatures
+            assert dense.d1 is not None  # the candidate map carries principal directions
+            self._rings = model_ring_descriptors(
+                self.distance_field, self.vertices[dense.site], self.normals[dense.site], dense.d1
+            )
+            self.timings["rings_s"] = time.perf_counter() - start
+        return self._rings
 
     @property
     def distance_field(self) -> DistanceField:

@@ -58,6 +58,7 @@ from tactile_sim.evaluation.benchmark_config import (
 )
 from tactile_sim.evaluation.databases import benchmark_database, mesh_files
 from tactile_sim.evaluation.reports import catalog_sessions_report, sensing_report, solids_report
+from tactile_sim.evaluation.scaling import database_footprint, footprint_table, sized_specs
 from tactile_sim.evaluation.sessions import (
     FIG_4_15_SOLIDS,
     SimulatedSource,
@@ -199,7 +200,7 @@ def check_config(config: BenchmarkConfig) -> None:
         for experiment in config.sim.experiments:
             if experiment != "sensing":
                 _sim_source(config, experiment)
-    elif config.sweep:
+    elif config.sweep and config.sweep != "database-size":
         _sweep_points(config)
     else:
         config.synthetic.source()
@@ -218,8 +219,10 @@ def run(config: BenchmarkConfig, *, echo: Echo = print) -> dict[str, Any]:
     check_config(config)
     if config.source == "sim":
         return run_sim(config, echo=echo)
-    database, name = benchmark_database(config.meshes)
     started = time.strftime("%Y-%m-%d %H:%M")
+    if config.sweep == "database-size":
+        return run_size_sweep(config, started, echo=echo)
+    database, name = benchmark_database(config.meshes, config.synthetic.database_size)
     if config.sweep:
         return run_sweep(config, database, name, started, echo=echo)
     return run_synthetic(config, database, name, started, echo=echo)
@@ -233,8 +236,13 @@ def run_synthetic(
     syn, methods = config.synthetic, config.methods
     source = syn.source()
     path = _results_path(config, name, source, methods.config(), "", _directory(database))
+    specs = (
+        instance_specs(database, source)
+        if syn.database_size is None
+        else sized_specs(database, source, syn.per_generated)
+    )
     jobs = plan_jobs(
-        instance_specs(database, source),
+        specs,
         source,
         methods.configs(),
         methods.thesis_instances,
@@ -308,6 +316,62 @@ def run_sweep(
         f"{stem}.png",
         sweep.thesis,
     )
+    _write_report(config, f"{stem}.md", text, echo)
+    return payload
+
+
+def run_size_sweep(config: BenchmarkConfig, started: str, *, echo: Echo = print) -> dict[str, Any]:
+    """Fast-mode success, time and memory against the database's size (the catalog's
+    models, then generated ones): ``per_model`` instances on each catalog model and
+    ``per_generated`` on each generated one, the same instances at every size; writes
+    ``sweep_database_size<tag>`` .json, .png and .md; returns the JSON payload."""
+    sweep = SWEEPS["database-size"]
+    syn, methods = config.synthetic, config.methods
+    source = syn.source()
+    registration = methods.config("fast")
+    results: dict[float, MethodSummary] = {}
+    footprints: dict[int, dict[str, Any]] = {}
+    for value in sweep.values:
+        size = int(value)
+        database, name = benchmark_database(config.meshes, size)
+        handle = _directory(database)
+        path = _results_path(config, name, source, registration, "_sweep", handle)
+        specs = sized_specs(database, source, syn.per_generated)
+        jobs = plan_jobs(specs, source, {"fast": registration}, methods.thesis_instances)
+        results[value] = summarize(_records(config, handle, jobs, path))["fast"]
+        footprints[size] = database_footprint(handle)
+        del database
+    stem = f"sweep_database_size{config.report.tag}"
+    payload = {
+        "parameter": sweep.parameter,
+        "figure": sweep.figure,
+        "date": started,
+        "machine": machine(),
+        "points": [
+            {"value": v, **s.to_json(), "footprint": footprints[int(v)]} for v, s in results.items()
+        ],
+    }
+    out = Path(config.report.out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    write_json_atomic(out / f"{stem}.json", payload)
+    sweep_figure(results, sweep.parameter, sweep.figure, out / f"{stem}.png")
+    settings = (
+        f"Instances: {syn.per_model} per catalog model and {syn.per_generated} per generated "
+        f"model (the same at every size), n = {syn.n_points} points per curve at d = "
+        f"{syn.spacing_mm} mm, planes {syn.plane_angle_deg:g} deg apart, noise sigma "
+        f"{syn.noise_mm} mm, delta = {methods.delta_per_mm} 1/mm. Values: `{stem}.json`."
+    )
+    text = sweep_report(
+        sweep.parameter,
+        sweep.figure,
+        "catalog and generated models",
+        _run_info(config, started),
+        settings,
+        results,
+        f"{stem}.png",
+        sweep.thesis,
+    )
+    text += "\n## Load time, memory and build time\n\n" + footprint_table(footprints) + "\n"
     _write_report(config, f"{stem}.md", text, echo)
     return payload
 

@@ -29,9 +29,11 @@ def mesh_files(mesh_dir: Path) -> list[Path]:
     return files
 
 
-def benchmark_database(meshes: MeshSettings) -> tuple[ModelDatabase, str]:
-    """The catalog's database, or one built from ``meshes.mesh_dir`` (with the catalog's
-    models too when ``meshes.with_catalog``), cached, and its name.
+def benchmark_database(meshes: MeshSettings, size: int | None = None) -> tuple[ModelDatabase, str]:
+    """The catalog's database, one of ``size`` models (the catalog's and generated ones:
+    :func:`~tactile_sim.objects.database.sized_database`), or one built from
+    ``meshes.mesh_dir`` (with the catalog's models too when ``meshes.with_catalog``),
+    cached, and its name.
 
     A folder's database is kept under ``meshes.cache_dir`` by a hash of the files' names
     and contents, the units, the table settings, the database format (and the catalog's
@@ -44,8 +46,10 @@ def benchmark_database(meshes: MeshSettings) -> tuple[ModelDatabase, str]:
         The folder holds no mesh file, or a mesh cannot be a model (e.g. millimetres read
         as metres).
     """
-    from tactile_sim.objects.database import cached_database, catalog_database
+    from tactile_sim.objects.database import cached_database, catalog_database, sized_database
 
+    if size is not None:
+        return sized_database(size), f"database_{size}"
     if meshes.mesh_dir is None:
         return catalog_database(), "catalog"
     mesh_dir = Path(meshes.mesh_dir)

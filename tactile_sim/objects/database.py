@@ -20,13 +20,15 @@ from tactile_sim.objects.catalog import (
     cache_key,
     load_catalog,
     load_object_recipe,
+    load_or_build,
     object_names,
 )
+from tactile_sim.objects.generated import generated_recipe
 
 if TYPE_CHECKING:
     from recognition import MeshModelConfig, ModelDatabase
 
-__all__ = ["cached_database", "catalog_database"]
+__all__ = ["cached_database", "catalog_database", "sized_database"]
 
 
 def cached_database(
@@ -101,6 +103,57 @@ def catalog_database(*, progress: bool = True) -> ModelDatabase:
         generated_dir("database") / key,
         build,
         f"the recognition database of the {len(recipes)} catalog objects",
+        config=config,
+        progress=progress,
+    )
+
+
+def sized_database(size: int, *, seed: int = 0, progress: bool = True) -> ModelDatabase:
+    """A database of ``size`` models: the catalog's first, then generated objects
+    (:mod:`tactile_sim.objects.generated`, seed ``seed``: ``blob-000``, ``blob-001``, ...).
+
+    Built once, with a progress bar per step, and cached like :func:`catalog_database`
+    under ``assets/generated/database/size-<size>-<key>``, the key hashing every model's
+    recipe hash, the table settings and the database format. The generated meshes are
+    cached one by one (:func:`~tactile_sim.objects.catalog.load_or_build`): an
+    interrupted build resumes from the last mesh made.
+
+    Raises
+    ------
+    ValueError
+        ``size`` is below 1.
+    """
+    from recognition import DATABASE_FORMAT, MeshModelConfig, ModelDatabase
+
+    if isinstance(size, bool) or not isinstance(size, int) or size < 1:
+        raise ValueError(f"a database needs a whole number of models >= 1, got {size!r}")
+    names = object_names()[:size]
+    recipes = [generated_recipe(i, seed) for i in range(size - len(names))]
+    config = MeshModelConfig()
+    settings = MeshingSettings()
+    keys = [cache_key(load_object_recipe(n), settings) for n in names]
+    keys += [cache_key(r, settings) for r in recipes]
+    payload = json.dumps([keys, repr(config), DATABASE_FORMAT])
+    key = hashlib.sha256(payload.encode()).hexdigest()[:16]
+
+    def build() -> ModelDatabase:
+        from tqdm.auto import tqdm
+
+        catalog = catalog_database(progress=progress)
+        meshes = {
+            r.name: load_or_build(r, settings, progress=False).mesh
+            for r in tqdm(recipes, desc="generating meshes", unit="object", disable=not progress)
+        }
+        chosen = {n: catalog[n] for n in names}
+        if meshes:
+            built = ModelDatabase.from_meshes(meshes, config=config, progress=progress)
+            chosen.update(built.models)
+        return ModelDatabase(chosen).prepare()
+
+    return cached_database(
+        generated_dir("database") / f"size-{size}-{key}",
+        build,
+        f"a database of {size} models ({len(names)} catalog, {len(recipes)} generated)",
         config=config,
         progress=progress,
     )

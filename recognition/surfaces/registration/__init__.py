@@ -50,6 +50,7 @@ from recognition.surfaces.registration.exact import (
     refine_exact,
     with_exact_error,
 )
+from recognition.surfaces.registration.fast import CandidateIndex
 from recognition.surfaces.registration.ranking import Recognition, rank
 from recognition.surfaces.registration.result import (
     ClosedFormRegistration,
@@ -62,6 +63,7 @@ __all__ = [
     "ALIGNED_SEARCH",
     "CONFIGS",
     "THOROUGH_SEARCH",
+    "CandidateIndex",
     "ClosedFormConfig",
     "ClosedFormRegistration",
     "DataGeometryConfig",

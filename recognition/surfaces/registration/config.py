@@ -92,6 +92,14 @@ class FastSearchConfig:
         Distinct poses per model kept next, refined on ``coarse_per_arm`` points per arm.
     n_final, final_iterations
         Distinct poses per model refined on every data point.
+    candidate_budget : int or None
+        Candidate-map rows screened across the whole database, at most: of the rows within
+        the lookup tolerance, those whose ring descriptors (:mod:`~recognition.surfaces.
+        rings`) and curvatures are nearest the data's; None: every row within the
+        tolerance. Bounds the screening's cost whatever the database's size.
+    screened_budget : int or None
+        Screened poses kept across the database, at most (the best by the screening
+        score, no more than ``n_screened`` of a model); None: ``n_screened`` per model.
     """
 
     tolerance_scale: float = 1.0
@@ -110,6 +118,8 @@ class FastSearchConfig:
     coarse_iterations: int = 4
     n_final: int = 4
     final_iterations: int = 25
+    candidate_budget: int | None = 20_000
+    screened_budget: int | None = 1536
 
 
 #: The first denser pass run when no model fits well enough (see FastConfig.fallbacks):
@@ -121,6 +131,8 @@ ALIGNED_SEARCH = FastSearchConfig(
     n_screened=384,
     n_coarse=96,
     n_final=8,
+    candidate_budget=60_000,
+    screened_budget=4608,
 )
 
 #: The last pass: every vertex, phi scanned all round (principal directions mislead on
@@ -133,6 +145,8 @@ THOROUGH_SEARCH = FastSearchConfig(
     n_screened=1000,
     n_coarse=150,
     n_final=12,
+    candidate_budget=150_000,
+    screened_budget=12_000,
 )
 
 

@@ -33,7 +33,7 @@ from recognition.surfaces.registration.config import (
 )
 from recognition.surfaces.registration.data import data_geometry
 from recognition.surfaces.registration.exact import with_exact_error
-from recognition.surfaces.registration.fast import register_fast
+from recognition.surfaces.registration.fast import CandidateIndex, register_fast
 from recognition.surfaces.registration.icp import register_icp
 from recognition.surfaces.registration.ranking import Recognition, rank
 from recognition.surfaces.registration.result import Registration, RegistrationMode
@@ -95,6 +95,7 @@ def register_all(
     geometry: LocalSurfaceGeometry | None = None,
     stack: FieldStack | None = None,
     which_field: ArrayLike | None = None,
+    index: CandidateIndex | None = None,
     threads: int = 1,
 ) -> list[Registration]:
     """Register data curves on each of ``models``: one registration per model, in order.
@@ -109,9 +110,9 @@ def register_all(
     geometry : LocalSurfaceGeometry, optional
         The data's local geometry, if already computed (it does not depend on the model;
         default :func:`~recognition.surfaces.registration.data.data_geometry`).
-    stack, which_field
-        Fast mode: the models' distance fields in one stack and each model's index in it
-        (built here if not given).
+    stack, which_field, index
+        Fast mode: the models' distance fields in one stack, each model's index in it and
+        the candidate maps of the stack's models in one table (built here if not given).
     threads : int
         Thesis, ICP and closed-form modes: models registered concurrently (numpy
         releases the GIL in the heavy array work); results do not depend on it.
@@ -127,7 +128,9 @@ def register_all(
     geometry = geometry or data_geometry(curves, config.geometry)
     if isinstance(config, FastConfig):
         meshes = [m for m in models if isinstance(m, MeshModel)]
-        return register_fast(meshes, curves, geometry, config, stack=stack, which_field=which_field)
+        return register_fast(
+            meshes, curves, geometry, config, stack=stack, which_field=which_field, index=index
+        )
 
     def one(model: Model) -> Registration:
         if isinstance(config, ThesisConfig) and isinstance(model, MeshModel):

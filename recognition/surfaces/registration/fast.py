@@ -54,8 +54,9 @@ from recognition.surfaces.registration.result import (
     rejected,
 )
 from recognition.surfaces.registration.superposition import frames, hypotheses
+from recognition.surfaces.rings import data_ring_descriptors, ring_scores
 
-__all__ = ["register_fast"]
+__all__ = ["CandidateIndex", "register_fast"]
 
 Array = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -69,6 +70,68 @@ class _Poses:
     R: Array
     t: Array
     rms: Array | None = None
+
+
+@dataclass(frozen=True, eq=False)
+class CandidateIndex:
+    """Every model's candidate map in one table, so that the lookup (4.7) and the ranking
+    by ring descriptors run over a whole database at once.
+
+    Attributes
+    ----------
+    owner : (R,) int
+        Position of each row's model in the database (its field in the field stack).
+    row : (R,) int
+        The row in its model's candidate map.
+    k1, k2 : (R,) float, 1/m
+    rings : (R, K, 2) float32
+        Ring descriptors (:mod:`~recognition.surfaces.rings`).
+    """
+
+    owner: IntArray
+    row: IntArray
+    k1: Array
+    k2: Array
+    rings: NDArray[np.float32]
+
+    @classmethod
+    def of(cls, models: Sequence[MeshModel], owners: ArrayLike | None = None) -> CandidateIndex:
+        """The index of ``models``' candidate maps, owned by ``owners`` (their fields in
+        the stack; default 0, 1, ...)."""
+        maps = [m.candidate_curvatures for m in models]
+        owners = np.arange(len(maps)) if owners is None else np.asarray(owners)
+        return cls(
+            np.repeat(owners, [len(c) for c in maps]),
+            np.concatenate([np.arange(len(c)) for c in maps]),
+            np.concatenate([c.k1 for c in maps]),
+            np.concatenate([c.k2 for c in maps]),
+            np.concatenate([m.rings for m in models]),
+        )
+
+    def select(
+        self,
+        geometry: LocalSurfaceGeometry,
+        data_rings: Array,
+        tolerance: float,
+        budget: int,
+        fields: IntArray,
+    ) -> tuple[IntArray, IntArray, Array, NDArray[np.bool_]]:
+        """The rows of the models in ``fields`` within ``tolerance`` (1/m; inf: any) of the
+        data's (k1, k2) (4.7), at most ``budget`` of them: those of least score, the ring
+        score (:func:`~recognition.surfaces.rings.ring_scores`) plus the squared curvature
+        distance in tolerances. Returns their owners, rows and scores, and which owners
+        have a row within the tolerance (before the budget)."""
+        allowed = np.zeros(int(self.owner.max()) + 1, bool)
+        allowed[fields] = True
+        dist = np.hypot(self.k1 - geometry.k1, self.k2 - geometry.k2)
+        keep = np.flatnonzero(allowed[self.owner] & (dist < tolerance))
+        score = ring_scores(self.rings[keep], data_rings)
+        if np.isfinite(tolerance):
+            score += (dist[keep] / tolerance) ** 2
+        matched = np.bincount(self.owner[keep], minlength=len(allowed)) > 0
+        best = _smallest(score, budget)
+        keep, score = keep[best], score[best]
+        return self.owner[keep], self.row[keep], score, matched
 
 
 #: With a clip, a start's points count at most this many robust standard deviations of
@@ -145,17 +208,23 @@ def _gauss_newton(
 
 
 def _dense_candidates(
-    model: MeshModel, geometry: LocalSurfaceGeometry, delta: float, spacing: float
+    model: MeshModel,
+    geometry: LocalSurfaceGeometry,
+    delta: float,
+    spacing: float,
+    chosen: IntArray | None = None,
 ) -> NDArray[np.int64]:
     """Rows of the candidate map within delta of the data's (k1, k2), one per cell.
 
     Rows of :attr:`MeshModel.candidate_curvatures` whose curvature is within ``delta``
-    (1/m; ``inf``: every row) of the data's (4.7); in each cubic cell of side
-    ``spacing`` the row nearest in (k1, k2) is kept, so candidates cover every matching
-    region about evenly.
+    (1/m; ``inf``: every row) of the data's (4.7), or the rows ``chosen``
+    (:meth:`CandidateIndex.select`); in each cubic cell of side ``spacing`` the row
+    nearest in (k1, k2) is kept, so candidates cover every matching region about evenly.
     """
     pool = model.candidate_curvatures
-    if np.isfinite(delta):
+    if chosen is not None:
+        rows = chosen
+    elif np.isfinite(delta):
         rows = pool.query(geometry.k1, geometry.k2, delta)
     else:
         rows = np.arange(len(pool))
@@ -210,13 +279,17 @@ def _screen(
     config: FastConfig,
     search: FastSearchConfig,
     log: Array,
-) -> list[tuple[_Poses | None, NDArray[np.int64]]]:
+    index: CandidateIndex | None = None,
+) -> list[tuple[_Poses | None, NDArray[np.int64], bool]]:
     """Stage 1: candidate poses of every model, scored on the screening points.
 
-    Every pose is first scored on the prescreening points; the best ``prescreen_keep``
-    of them (at least ``n_screened``) are scored again on the screening points. Returns,
-    per model, the best ``n_screened`` poses (None without candidates) and the candidate
-    vertices.
+    With ``index`` and a ``candidate_budget``, the candidates are the budget's best rows
+    over all the models at once (:meth:`CandidateIndex.select`). Every pose is first
+    scored on the prescreening points; the best ``prescreen_keep`` of them (at least
+    ``n_screened``) are scored again on the screening points. Returns, per model, its
+    best ``n_screened`` poses (with a ``screened_budget``, only those among the best of
+    all models; None without candidates), the candidate vertices, and whether it had
+    candidates within the lookup tolerance (False: rejected at table lookup).
     """
     points = curves.points[_arm_indices(curves, geometry.point, search.arm_fractions)]
     pre_points = curves.points[_arm_indices(curves, geometry.point, search.prescreen_fractions)]
@@ -224,6 +297,7 @@ def _screen(
     best_t: list[list[Array]] = [[] for _ in models]
     best_s: list[list[Array]] = [[] for _ in models]
     candidates: list[list[NDArray[np.int64]]] = [[] for _ in models]
+    matched = np.zeros(len(models), bool)
     half = np.arange(
         -search.aligned_window_rad, search.aligned_window_rad + 1e-9, search.aligned_step_rad
     )
@@ -236,11 +310,34 @@ def _screen(
         local = (points - hyp.point) @ hyp.frame  # (P, 3) in the data's (d1, d2, N) frame
         pre_local = (pre_points - hyp.point) @ hyp.frame
         data_anisotropic = hyp.k1 - hyp.k2 >= search.aligned_anisotropy
+        chosen: dict[int, IntArray] | None = None
+        if index is not None and search.candidate_budget is not None:
+            start = time.perf_counter()
+            owner, row, _, within = index.select(
+                hyp,
+                data_ring_descriptors(curves, hyp),
+                tolerance,
+                search.candidate_budget,
+                which_field,
+            )
+            matched |= within[which_field]
+            order = np.argsort(owner, kind="stable")
+            bounds = np.searchsorted(owner[order], which_field, side="left")
+            ends = np.searchsorted(owner[order], which_field, side="right")
+            chosen = {w: row[order[a:b]] for w, (a, b) in enumerate(zip(bounds, ends, strict=True))}
+            log += (time.perf_counter() - start) / max(len(models), 1)
         for w, model in enumerate(models):
             start = time.perf_counter()
             pool = model.candidate_curvatures
-            rows = _dense_candidates(model, hyp, tolerance, search.candidate_spacing_m)
+            rows = _dense_candidates(
+                model,
+                hyp,
+                tolerance,
+                search.candidate_spacing_m,
+                None if chosen is None else chosen[w],
+            )
             candidates[w].append(pool.site[rows])
+            matched[w] |= rows.size > 0
             if rows.size == 0:
                 log[w] += time.perf_counter() - start
                 continue
@@ -272,15 +369,24 @@ def _screen(
                 best_t[w].append(origins[c] - R @ hyp.point)
                 best_s[w].append(score)
             log[w] += time.perf_counter() - start
-    out: list[tuple[_Poses | None, NDArray[np.int64]]] = []
+    scores = [np.concatenate(x) if x else np.zeros(0) for x in best_s]
+    cutoff = np.inf
+    if search.screened_budget is not None:
+        ranked = np.concatenate(
+            [np.sort(x, kind="stable")[: search.n_screened] for x in scores] or [np.zeros(0)]
+        )
+        if ranked.size > search.screened_budget:
+            cutoff = np.partition(ranked, search.screened_budget - 1)[search.screened_budget - 1]
+    out: list[tuple[_Poses | None, NDArray[np.int64], bool]] = []
     for w in range(len(models)):
         cands = np.concatenate(candidates[w]) if candidates[w] else np.zeros(0, np.int64)
-        if not best_R[w]:
-            out.append((None, cands))
+        keep = np.argsort(scores[w], kind="stable")[: search.n_screened]
+        keep = keep[scores[w][keep] <= cutoff]
+        if not keep.size:
+            out.append((None, cands, bool(matched[w])))
             continue
-        R, t, s = (np.concatenate(x) for x in (best_R[w], best_t[w], best_s[w]))
-        keep = np.argsort(s, kind="stable")[: search.n_screened]
-        out.append((_Poses(R[keep], t[keep]), cands))
+        R, t = (np.concatenate(x) for x in (best_R[w], best_t[w]))
+        out.append((_Poses(R[keep], t[keep]), cands, bool(matched[w])))
     return out
 
 
@@ -293,8 +399,10 @@ def _search(
     search: FastSearchConfig,
     which_field: IntArray,
     threshold_m: float,
+    index: CandidateIndex | None = None,
 ) -> list[Registration]:
-    """One pass of the fast search over ``models`` (fields ``which_field`` in ``stack``).
+    """One pass of the fast search over ``models`` (fields ``which_field`` in ``stack``,
+    candidates ranked by ``index``).
 
     Returns one registration per model, its error read off the distance field, each
     point's distance counted at most ``threshold_m`` (beyond it the point is an outlier).
@@ -306,7 +414,7 @@ def _search(
     screen_idx = _arm_indices(curves, geometry.point, search.arm_fractions)
     fractions = np.arange(1, search.coarse_per_arm + 1) / search.coarse_per_arm
     coarse_idx = np.unique(_arm_indices(curves, geometry.point, fractions))
-    screened = _screen(models, stack, which_field, curves, geometry, config, search, seconds)
+    screened = _screen(models, stack, which_field, curves, geometry, config, search, seconds, index)
 
     def batched(
         poses: list[_Poses | None], stage_points: Array, steps: int, clip_m: float | None = None
@@ -369,7 +477,7 @@ def _search(
         ]
 
     first = batched(
-        [p for p, _ in screened], points[screen_idx], search.screen_iterations, threshold_m
+        [p for p, _, _ in screened], points[screen_idx], search.screen_iterations, threshold_m
     )
     coarse = batched(
         distinct(prune(first, config.screen_prune_ratio), search.n_coarse),
@@ -403,9 +511,13 @@ def _search(
     seconds_per_pose = (time.perf_counter() - start) / max(int(bounds[-1]) if live else 0, 1)
     out = []
     for w, model in enumerate(models):
-        candidates = screened[w][1]
+        candidates, matched = screened[w][1], screened[w][2]
         if w not in scored:
-            out.append(rejected(model.name, RegistrationMode.FAST, 0.0, candidates, seconds[w]))
+            # a model with candidates that the budgets left out is pruned, not rejected
+            dropped = rejected(model.name, RegistrationMode.FAST, 0.0, candidates, seconds[w])
+            if matched:
+                dropped = replace(dropped, status=RegistrationStatus.PRUNED)
+            out.append(dropped)
             continue
         rows = scored[w]
         errors = np.mean(np.minimum(distances[rows], threshold_m), axis=1)
@@ -448,6 +560,7 @@ def register_fast(
     stack: FieldStack | None = None,
     which_field: ArrayLike | None = None,
     noise_m: float | None = None,
+    index: CandidateIndex | None = None,
 ) -> list[Registration]:
     """Fast-mode registration of the curves on several models at once (module docstring).
 
@@ -465,6 +578,9 @@ def register_fast(
     noise_m : float, optional
         The data's noise across the surface (default :func:`data_noise_m`), for the
         fallback test and the outlier threshold.
+    index : CandidateIndex, optional
+        The models' candidate maps in one table, its owners the fields of ``stack``
+        (built here if not given).
 
     Returns
     -------
@@ -478,6 +594,8 @@ def register_fast(
     if stack is None:
         stack = FieldStack.of([m.distance_field for m in models])
     which_field = np.arange(len(models)) if which_field is None else np.asarray(which_field)
+    if index is None:
+        index = CandidateIndex.of(models, which_field)
     noise = data_noise_m(curves) if noise_m is None else noise_m
     threshold = outlier_threshold_m(noise, config)
     trusted = data_fit_residual_m(curves, config.geometry, geometry.point) <= (
@@ -486,7 +604,7 @@ def register_fast(
     search = config.search
     if not trusted:
         search = replace(search, tolerance_scale=np.inf, aligned_anisotropy=np.inf)
-    first = _search(models, stack, curves, geometry, config, search, which_field, threshold)
+    first = _search(models, stack, curves, geometry, config, search, which_field, threshold, index)
     registrations = _polish(models, curves, geometry, first, config, threshold, noise)
     acceptable = acceptable_error_m(noise, len(curves.points), config)
     for fallback in config.fallbacks:
@@ -498,6 +616,8 @@ def register_fast(
             for w, r in enumerate(registrations)
             if r.status is not RegistrationStatus.NO_CANDIDATES
         ]
+        if not kept:
+            break
         found = _search(
             [models[w] for w in kept],
             stack,
@@ -507,6 +627,7 @@ def register_fast(
             fallback,
             which_field[kept],
             threshold,
+            index,
         )
         merged = list(registrations)
         for w, b in zip(kept, found, strict=True):

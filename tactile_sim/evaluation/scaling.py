@@ -1,0 +1,115 @@
+"""Recognition against databases of growing size: the instances, and each database's load
+time, memory and build time."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from dataclasses import replace
+from pathlib import Path
+from typing import Any
+
+from recognition import ModelDatabase
+from recognition.evaluation.instances import InstanceSpec
+from recognition.evaluation.synthetic_source import SyntheticSource, instance_specs
+from recognition.reproduction.tables import markdown_table
+from tactile_sim.objects.catalog import object_names
+
+__all__ = ["database_footprint", "footprint_table", "sized_specs"]
+
+
+def sized_specs(
+    database: ModelDatabase, source: SyntheticSource, per_generated: int
+) -> list[InstanceSpec]:
+    """``source.per_model`` instances on each catalog model of ``database`` and
+    ``per_generated`` on each other model; an instance depends only on its model and
+    the seed, so every database size shares its models' instances."""
+    catalog = [n for n in database.names if n in object_names()]
+    others = [n for n in database.names if n not in catalog]
+    specs = instance_specs(ModelDatabase({n: database[n] for n in catalog}), source)
+    if others:
+        generated = ModelDatabase({n: database[n] for n in others})
+        specs += instance_specs(generated, replace(source, per_model=per_generated))
+    return specs
+
+
+# Run in a fresh interpreter: what a worker pays to load the database, and what it holds.
+_FOOTPRINT = """
+import json, resource, sys, time
+from recognition import ModelDatabase
+def rss_mb():
+    for line in open("/proc/self/status"):
+        if line.startswith("VmRSS:"):
+            return int(line.split()[1]) / 1024
+before = rss_mb()
+start = time.perf_counter()
+db = ModelDatabase.load(sys.argv[1])
+load_s = time.perf_counter() - start
+parts = {"mesh": 0, "distance field": 0, "candidate map and rings": 0, "lookup table": 0}
+for m in db.models.values():
+    parts["mesh"] += m.vertices.nbytes + m.faces.nbytes + m.normals.nbytes
+    parts["distance field"] += m.distance_field.values.nbytes
+    c = m.candidate_curvatures
+    parts["candidate map and rings"] += c.site.nbytes + c.k1.nbytes + c.k2.nbytes
+    parts["candidate map and rings"] += c.d1.nbytes + m.rings.nbytes
+    parts["lookup table"] += m.table.site.nbytes + 2 * m.table.k1.nbytes + m.table.d1.nbytes
+parts["field stack"] = db.field_stack.values.nbytes
+index = db.candidate_index
+arrays = (index.owner, index.row, index.k1, index.k2, index.rings)
+parts["candidate index"] = sum(a.nbytes for a in arrays)
+timings = [sum(m.timings.values()) for m in db.models.values()]
+print(json.dumps({
+    "models": len(db), "load_s": load_s, "rss_mb": rss_mb(), "baseline_rss_mb": before,
+    "arrays_mb": {k: v / 2**20 for k, v in parts.items()},
+    "build_s_per_model": sum(timings) / len(timings),
+}))
+"""
+
+
+def database_footprint(directory: Path, repeats: int = 2) -> dict[str, Any]:
+    """Load time (s, warm: the best of ``repeats`` loads, each in a fresh interpreter),
+    resident memory after the load and before it (MB), the arrays by kind (MB) and the
+    mean table build time per model (s, from the manifest) of the database in
+    ``directory``."""
+    runs = [
+        json.loads(
+            subprocess.run(
+                [sys.executable, "-c", _FOOTPRINT, str(directory)],
+                check=True,
+                capture_output=True,
+                text=True,
+            ).stdout
+        )
+        for _ in range(repeats)
+    ]
+    return min(runs, key=lambda r: r["load_s"])
+
+
+def footprint_table(footprints: dict[int, dict[str, Any]]) -> str:
+    """Markdown table of :func:`database_footprint` per database size."""
+    kinds = list(next(iter(footprints.values()))["arrays_mb"])
+    rows = []
+    for size, f in footprints.items():
+        arrays = f["arrays_mb"]
+        rows.append(
+            [
+                size,
+                f["load_s"],
+                f["rss_mb"] - f["baseline_rss_mb"],
+                f["rss_mb"],
+                *(arrays[k] for k in kinds),
+                f["build_s_per_model"],
+            ]
+        )
+    return markdown_table(
+        [
+            "models",
+            "load s (warm)",
+            "memory of the load MB",
+            "process MB",
+            *(f"{k} MB" for k in kinds),
+            "table build s per model",
+        ],
+        rows,
+    )
