@@ -39,25 +39,10 @@ from tactile_sim.probing import MAX_SPACING_M
 
 #: Options of one source only, by source (given with the other, they are an error).
 _SOURCE_OPTIONS = {
-    "synthetic": (
-        "per_model",
-        "n_points",
-        "spacing_mm",
-        "plane_angle",
-        "noise_mm",
-        "sweep",
-        "database_size",
-        "per_generated",
-    ),
-    "sim": (
-        "experiment",
-        "sessions",
-        "first_session",
-        "object",
-        "sim_curves",
-        "sim_spacing_mm",
-        "model_error_mm",
-    ),
+    "synthetic": "per_model n_points spacing_mm plane_angle noise_mm sweep database_size "
+    "per_generated".split(),
+    "sim": "experiment sessions first_session object sim_curves sim_spacing_mm "
+    "model_error_mm".split(),
 }
 
 
@@ -127,16 +112,8 @@ def parse_args(argv: list[str] | None = None) -> BenchmarkConfig:
         help="with --mesh-dir: recognise against the catalog's models as well",
     )
     p.add_argument("--sweep", choices=tuple(SWEEPS))
-    p.add_argument(
-        "--database-size",
-        type=integer(1),
-        help="models: the catalog's, then generated ones (built once, cached)",
-    )
-    p.add_argument(
-        "--per-generated",
-        type=integer(1),
-        help=f"instances per generated model ({syn.per_generated})",
-    )
+    p.add_argument("--database-size", type=integer(1), help="models: the catalog, then generated")
+    p.add_argument("--per-generated", type=integer(1), help="instances per generated model")
     p.add_argument("--results", type=Path, help="JSONL of per-instance records")
     p.add_argument("--json", type=Path, dest="json_path", help="summary per method")
     p.add_argument(

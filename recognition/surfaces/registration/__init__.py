@@ -15,6 +15,7 @@ One front door, :func:`register` (one model) / :func:`register_all` (several) /
     Local searches of E(u, v, phi) (4.11) from the table's candidates (:mod:`.closed_form`).
 """
 
+from recognition.surfaces.registration.candidates import CandidateIndex
 from recognition.surfaces.registration.config import (
     ALIGNED_SEARCH,
     THOROUGH_SEARCH,
@@ -50,7 +51,6 @@ from recognition.surfaces.registration.exact import (
     refine_exact,
     with_exact_error,
 )
-from recognition.surfaces.registration.fast import CandidateIndex
 from recognition.surfaces.registration.ranking import Recognition, rank
 from recognition.surfaces.registration.result import (
     ClosedFormRegistration,

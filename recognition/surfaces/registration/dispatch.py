@@ -23,6 +23,7 @@ from recognition.surfaces.data_curves import DataCurves
 from recognition.surfaces.distance import FieldStack
 from recognition.surfaces.local_geometry import LocalSurfaceGeometry
 from recognition.surfaces.mesh_model import MeshModel
+from recognition.surfaces.registration.candidates import CandidateIndex
 from recognition.surfaces.registration.closed_form import register_closed_form
 from recognition.surfaces.registration.config import (
     ClosedFormConfig,
@@ -33,7 +34,7 @@ from recognition.surfaces.registration.config import (
 )
 from recognition.surfaces.registration.data import data_geometry
 from recognition.surfaces.registration.exact import with_exact_error
-from recognition.surfaces.registration.fast import CandidateIndex, register_fast
+from recognition.surfaces.registration.fast import register_fast
 from recognition.surfaces.registration.icp import register_icp
 from recognition.surfaces.registration.ranking import Recognition, rank
 from recognition.surfaces.registration.result import Registration, RegistrationMode

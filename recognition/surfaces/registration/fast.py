@@ -2,14 +2,19 @@
 
 The data's normal and curvatures are estimated at the point where all three curves meet,
 at the scale of the models' fits (:func:`~recognition.surfaces.registration.data.
-data_geometry`). Table lookup (4.7) in a curvature map of one vertex per 1 mm cell,
-thinned to one candidate per 2.5 mm cell; where the curve fits at p do not explain the
-data (p on a crease), candidates come from the whole surface. At each candidate the data
+data_geometry`). Table lookup (4.7) in a curvature map of one vertex per 1 mm cell, over
+every model at once; of the rows it keeps, at most ``candidate_budget`` across the
+database, those whose ring descriptors (the surface's height on rings about the vertex,
+:mod:`~recognition.surfaces.rings`) best match the data's
+(:class:`~recognition.surfaces.registration.candidates.CandidateIndex`); thinned to one
+candidate per 2.5 mm cell. Where the curve fits at p do not explain the data (p on a
+crease), candidates come from the whole surface. At each candidate the data
 are superposed (p on the vertex, N on its normal, Section 4.1.2.2) at rotations phi about
 the normal: a window around the alignment of the principal directions where both data
 and model are clearly anisotropic, a full scan elsewhere. Every (candidate, phi) pose of
 every model is screened in one vectorised batch on the models' narrow-band signed
-distance fields with a few points per arm of the data; the best poses of each model slide
+distance fields with a few points per arm of the data; the best poses of each model (at
+most ``screened_budget`` across the database) slide
 into their basins by batched Gauss-Newton over all six degrees of freedom on ever more
 points, near-duplicates dropped between stages; each stage's loss is a truncated
 quadratic, so that a gross outlier does not pull the pose. A model whose screened or
@@ -39,6 +44,7 @@ from recognition.surfaces.distance import FieldStack
 from recognition.surfaces.local_geometry import LocalSurfaceGeometry
 from recognition.surfaces.mesh_model import MeshModel
 from recognition.surfaces.registration.ambiguity import Resolution, distinct_poses
+from recognition.surfaces.registration.candidates import CandidateIndex, one_per_cell, smallest
 from recognition.surfaces.registration.config import FastConfig, FastSearchConfig
 from recognition.surfaces.registration.data import (
     acceptable_error_m,
@@ -54,9 +60,9 @@ from recognition.surfaces.registration.result import (
     rejected,
 )
 from recognition.surfaces.registration.superposition import frames, hypotheses
-from recognition.surfaces.rings import data_ring_descriptors, ring_scores
+from recognition.surfaces.rings import data_ring_descriptors
 
-__all__ = ["CandidateIndex", "register_fast"]
+__all__ = ["register_fast"]
 
 Array = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -70,68 +76,6 @@ class _Poses:
     R: Array
     t: Array
     rms: Array | None = None
-
-
-@dataclass(frozen=True, eq=False)
-class CandidateIndex:
-    """Every model's candidate map in one table, so that the lookup (4.7) and the ranking
-    by ring descriptors run over a whole database at once.
-
-    Attributes
-    ----------
-    owner : (R,) int
-        Position of each row's model in the database (its field in the field stack).
-    row : (R,) int
-        The row in its model's candidate map.
-    k1, k2 : (R,) float, 1/m
-    rings : (R, K, 2) float32
-        Ring descriptors (:mod:`~recognition.surfaces.rings`).
-    """
-
-    owner: IntArray
-    row: IntArray
-    k1: Array
-    k2: Array
-    rings: NDArray[np.float32]
-
-    @classmethod
-    def of(cls, models: Sequence[MeshModel], owners: ArrayLike | None = None) -> CandidateIndex:
-        """The index of ``models``' candidate maps, owned by ``owners`` (their fields in
-        the stack; default 0, 1, ...)."""
-        maps = [m.candidate_curvatures for m in models]
-        owners = np.arange(len(maps)) if owners is None else np.asarray(owners)
-        return cls(
-            np.repeat(owners, [len(c) for c in maps]),
-            np.concatenate([np.arange(len(c)) for c in maps]),
-            np.concatenate([c.k1 for c in maps]),
-            np.concatenate([c.k2 for c in maps]),
-            np.concatenate([m.rings for m in models]),
-        )
-
-    def select(
-        self,
-        geometry: LocalSurfaceGeometry,
-        data_rings: Array,
-        tolerance: float,
-        budget: int,
-        fields: IntArray,
-    ) -> tuple[IntArray, IntArray, Array, NDArray[np.bool_]]:
-        """The rows of the models in ``fields`` within ``tolerance`` (1/m; inf: any) of the
-        data's (k1, k2) (4.7), at most ``budget`` of them: those of least score, the ring
-        score (:func:`~recognition.surfaces.rings.ring_scores`) plus the squared curvature
-        distance in tolerances. Returns their owners, rows and scores, and which owners
-        have a row within the tolerance (before the budget)."""
-        allowed = np.zeros(int(self.owner.max()) + 1, bool)
-        allowed[fields] = True
-        dist = np.hypot(self.k1 - geometry.k1, self.k2 - geometry.k2)
-        keep = np.flatnonzero(allowed[self.owner] & (dist < tolerance))
-        score = ring_scores(self.rings[keep], data_rings)
-        if np.isfinite(tolerance):
-            score += (dist[keep] / tolerance) ** 2
-        matched = np.bincount(self.owner[keep], minlength=len(allowed)) > 0
-        best = _smallest(score, budget)
-        keep, score = keep[best], score[best]
-        return self.owner[keep], self.row[keep], score, matched
 
 
 #: With a clip, a start's points count at most this many robust standard deviations of
@@ -207,37 +151,6 @@ def _gauss_newton(
     return result.state[0], result.state[1], np.sqrt(result.cost), trace
 
 
-def _dense_candidates(
-    model: MeshModel,
-    geometry: LocalSurfaceGeometry,
-    delta: float,
-    spacing: float,
-    chosen: IntArray | None = None,
-) -> NDArray[np.int64]:
-    """Rows of the candidate map within delta of the data's (k1, k2), one per cell.
-
-    Rows of :attr:`MeshModel.candidate_curvatures` whose curvature is within ``delta``
-    (1/m; ``inf``: every row) of the data's (4.7), or the rows ``chosen``
-    (:meth:`CandidateIndex.select`); in each cubic cell of side ``spacing`` the row
-    nearest in (k1, k2) is kept, so candidates cover every matching region about evenly.
-    """
-    pool = model.candidate_curvatures
-    if chosen is not None:
-        rows = chosen
-    elif np.isfinite(delta):
-        rows = pool.query(geometry.k1, geometry.k2, delta)
-    else:
-        rows = np.arange(len(pool))
-    if rows.size == 0:
-        return rows
-    dist = np.hypot(pool.k1[rows] - geometry.k1, pool.k2[rows] - geometry.k2)
-    cell = model.cell_keys(spacing)[pool.site[rows]]
-    order = np.lexsort((dist, cell))
-    first = np.ones(order.size, bool)
-    first[1:] = cell[order[1:]] != cell[order[:-1]]
-    return rows[order[first]]
-
-
 def _arm_indices(curves: DataCurves, point: Array, fractions: Sequence[float] | Array) -> IntArray:
     """Indices into ``curves.points`` of the points at ``fractions`` of each arm's length.
 
@@ -263,13 +176,6 @@ def _arm_indices(curves: DataCurves, point: Array, fractions: Sequence[float] | 
     return np.array(idx, dtype=np.int64)
 
 
-def _smallest(values: Array, count: int) -> NDArray[np.intp]:
-    """Indices of the ``count`` smallest values (all if fewer), in no particular order."""
-    if count >= values.size:
-        return np.arange(values.size)
-    return np.argpartition(values, count - 1)[:count]
-
-
 def _screen(
     models: Sequence[MeshModel],
     stack: FieldStack,
@@ -279,12 +185,12 @@ def _screen(
     config: FastConfig,
     search: FastSearchConfig,
     log: Array,
-    index: CandidateIndex | None = None,
+    index: CandidateIndex,
 ) -> list[tuple[_Poses | None, NDArray[np.int64], bool]]:
     """Stage 1: candidate poses of every model, scored on the screening points.
 
-    With ``index`` and a ``candidate_budget``, the candidates are the budget's best rows
-    over all the models at once (:meth:`CandidateIndex.select`). Every pose is first
+    The candidates come from all the models at once (:meth:`CandidateIndex.select`,
+    within the ``candidate_budget``), one per cell. Every pose is first
     scored on the prescreening points; the best ``prescreen_keep`` of them (at least
     ``n_screened``) are scored again on the screening points. Returns, per model, its
     best ``n_screened`` poses (with a ``screened_budget``, only those among the best of
@@ -310,34 +216,21 @@ def _screen(
         local = (points - hyp.point) @ hyp.frame  # (P, 3) in the data's (d1, d2, N) frame
         pre_local = (pre_points - hyp.point) @ hyp.frame
         data_anisotropic = hyp.k1 - hyp.k2 >= search.aligned_anisotropy
-        chosen: dict[int, IntArray] | None = None
-        if index is not None and search.candidate_budget is not None:
-            start = time.perf_counter()
-            owner, row, _, within = index.select(
-                hyp,
-                data_ring_descriptors(curves, hyp),
-                tolerance,
-                search.candidate_budget,
-                which_field,
-            )
-            matched |= within[which_field]
-            order = np.argsort(owner, kind="stable")
-            bounds = np.searchsorted(owner[order], which_field, side="left")
-            ends = np.searchsorted(owner[order], which_field, side="right")
-            chosen = {w: row[order[a:b]] for w, (a, b) in enumerate(zip(bounds, ends, strict=True))}
-            log += (time.perf_counter() - start) / max(len(models), 1)
+        start = time.perf_counter()
+        chosen, within = index.select(
+            hyp,
+            data_ring_descriptors(curves, hyp),
+            tolerance,
+            search.candidate_budget,
+            which_field,
+        )
+        matched |= within
+        log += (time.perf_counter() - start) / len(models)
         for w, model in enumerate(models):
             start = time.perf_counter()
             pool = model.candidate_curvatures
-            rows = _dense_candidates(
-                model,
-                hyp,
-                tolerance,
-                search.candidate_spacing_m,
-                None if chosen is None else chosen[w],
-            )
+            rows = one_per_cell(model, hyp, chosen[w], search.candidate_spacing_m)
             candidates[w].append(pool.site[rows])
-            matched[w] |= rows.size > 0
             if rows.size == 0:
                 log[w] += time.perf_counter() - start
                 continue
@@ -358,11 +251,11 @@ def _screen(
                 pre = np.abs(stack.nearest_in_frames(which, F, origins, pre_patterns))
                 pre = pre.mean(axis=-1).ravel()
                 count = max(search.n_screened, int(np.ceil(search.prescreen_keep * pre.size)))
-                c, f = np.divmod(_smallest(pre, count), len(phis))
+                c, f = np.divmod(smallest(pre, count), len(phis))
                 score = np.abs(
                     stack.nearest_in_frames(which[c], F[c], origins[c], patterns[f], paired=True)
                 ).mean(axis=-1)
-                keep = _smallest(score, search.n_screened)
+                keep = smallest(score, search.n_screened)
                 c, f, score = c[keep], f[keep], score[keep]
                 R = F[c] @ turns[f] @ hyp.frame.T
                 best_R[w].append(R)
@@ -399,7 +292,7 @@ def _search(
     search: FastSearchConfig,
     which_field: IntArray,
     threshold_m: float,
-    index: CandidateIndex | None = None,
+    index: CandidateIndex,
 ) -> list[Registration]:
     """One pass of the fast search over ``models`` (fields ``which_field`` in ``stack``,
     candidates ranked by ``index``).

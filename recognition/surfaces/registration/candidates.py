@@ -1,0 +1,112 @@
+"""The fast mode's candidates: the lookup (4.7) over every model of a database at once,
+ranked by ring descriptors within a budget, thinned to one per cell."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from recognition.surfaces.local_geometry import LocalSurfaceGeometry
+from recognition.surfaces.mesh_model import MeshModel
+from recognition.surfaces.rings import ring_scores
+
+__all__ = ["CandidateIndex", "one_per_cell", "smallest"]
+
+Array = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
+
+def smallest(values: Array, count: int | float) -> NDArray[np.intp]:
+    """Indices of the ``count`` smallest values (all if fewer), in no particular order."""
+    if count >= values.size:
+        return np.arange(values.size)
+    return np.argpartition(values, int(count) - 1)[: int(count)]
+
+
+@dataclass(frozen=True, eq=False)
+class CandidateIndex:
+    """Every model's candidate map (:attr:`MeshModel.candidate_curvatures`) in one table.
+
+    Attributes
+    ----------
+    owner : (R,) int
+        The field (in the search's field stack) of each row's model.
+    row : (R,) int
+        The row in its model's candidate map.
+    k1, k2 : (R,) float, 1/m
+    rings : (R, K, 2) float32
+        Ring descriptors (:mod:`~recognition.surfaces.rings`).
+    """
+
+    owner: IntArray
+    row: IntArray
+    k1: Array
+    k2: Array
+    rings: NDArray[np.float32]
+
+    @classmethod
+    def of(cls, models: Sequence[MeshModel], owners: ArrayLike | None = None) -> CandidateIndex:
+        """The index of ``models``' candidate maps, owned by ``owners`` (their fields in
+        the stack; default 0, 1, ...)."""
+        maps = [m.candidate_curvatures for m in models]
+        owners = np.arange(len(maps)) if owners is None else np.asarray(owners)
+        return cls(
+            np.repeat(owners, [len(c) for c in maps]),
+            np.concatenate([np.arange(len(c)) for c in maps]),
+            np.concatenate([c.k1 for c in maps]),
+            np.concatenate([c.k2 for c in maps]),
+            np.concatenate([m.rings for m in models]),
+        )
+
+    def select(
+        self,
+        geometry: LocalSurfaceGeometry,
+        data_rings: Array,
+        tolerance: float,
+        budget: int | None,
+        fields: IntArray,
+    ) -> tuple[list[IntArray], NDArray[np.bool_]]:
+        """The candidate rows of each model of ``fields``, and whether it has any.
+
+        The rows within ``tolerance`` (1/m; inf: every row) of the data's (k1, k2)
+        (4.7); over ``budget`` of them (None: no limit) across all the models, those of
+        least score: the ring score (:func:`~recognition.surfaces.rings.ring_scores`)
+        plus the squared curvature distance in tolerances. A model without a row within
+        the tolerance is rejected at table lookup; one whose rows the budget left out
+        is not.
+        """
+        allowed = np.zeros(int(self.owner.max()) + 1, bool)
+        allowed[fields] = True
+        dist = np.hypot(self.k1 - geometry.k1, self.k2 - geometry.k2)
+        keep = np.flatnonzero(allowed[self.owner] & (dist < tolerance))
+        matched = np.bincount(self.owner[keep], minlength=len(allowed))[fields] > 0
+        if budget is not None and keep.size > budget:
+            score = ring_scores(self.rings[keep], data_rings)
+            if np.isfinite(tolerance):
+                score += (dist[keep] / tolerance) ** 2
+            keep = np.sort(keep[smallest(score, budget)])
+        keep = keep[np.argsort(self.owner[keep], kind="stable")]
+        owner = self.owner[keep]
+        starts = np.searchsorted(owner, fields, side="left")
+        ends = np.searchsorted(owner, fields, side="right")
+        return [self.row[keep[a:b]] for a, b in zip(starts, ends, strict=True)], matched
+
+
+def one_per_cell(
+    model: MeshModel, geometry: LocalSurfaceGeometry, rows: IntArray, spacing: float
+) -> IntArray:
+    """Of the candidate map's ``rows``, the one nearest the data's (k1, k2) in each cubic
+    cell of side ``spacing`` (metres), so that candidates cover every matching region
+    about evenly."""
+    if rows.size == 0:
+        return rows
+    pool = model.candidate_curvatures
+    dist = np.hypot(pool.k1[rows] - geometry.k1, pool.k2[rows] - geometry.k2)
+    cell = model.cell_keys(spacing)[pool.site[rows]]
+    order = np.lexsort((dist, cell))
+    first = np.ones(order.size, bool)
+    first[1:] = cell[order[1:]] != cell[order[:-1]]
+    return rows[order[first]]
