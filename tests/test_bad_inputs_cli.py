@@ -128,6 +128,13 @@ CASES = [
     ("benchmark", "--tag a/b", "--tag 'a/b': expected a file-name suffix"),
     ("benchmark", "--out-dir {file}", "--out-dir {file}: {file} is a file; expected a directory"),
     ("benchmark", "--json {tmp}", "--json {tmp}: {tmp} is a directory; expected a file"),
+    ("benchmark", "--database-size 0", "argument --database-size: expected an integer >= 1"),
+    ("benchmark", "--per-generated 0", "argument --per-generated: expected an integer >= 1"),
+    (
+        "benchmark",
+        "--mesh-dir {tmp} --database-size 20",
+        "--mesh-dir and a database of generated models exclude each other",
+    ),
     # reproduce_thesis.py
     ("reproduce_thesis", "--workers 0", "argument --workers: expected an integer >= 1, got 0"),
     ("reproduce_thesis", "--workers -1", "argument --workers: expected an integer >= 1, got -1"),

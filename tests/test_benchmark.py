@@ -489,6 +489,31 @@ def test_a_sweep_writes_one_point_per_value_with_its_figure(tmp_path: Path) -> N
     assert "![Fig. 4.12](sweep_length.png)" in (out / "sweep_length.md").read_text()
 
 
+@pytest.mark.slow
+def test_the_database_size_sweep_reports_success_time_and_footprint(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Two sizes (the catalog, and it with two generated models): the same catalog
+    instances at both, one on each generated model, each size's load time and memory."""
+    sizes = dataclasses.replace(SWEEPS["database-size"], values=(10.0, 12.0))
+    monkeypatch.setitem(SWEEPS, "database-size", sizes)
+    out = tmp_path / "out"
+    argv = ["--sweep", "database-size", "--per-model", "1", "--per-generated", "1"]
+    argv += ["--n-points", "21", "--spacing-mm", "1.2", "--workers", "1", "--out-dir", str(out)]
+    assert run_cli(lambda: run(_mesh_config(tmp_path, argv))) == 0
+    payload = json.loads((out / "sweep_database_size.json").read_text())
+    assert [p["value"] for p in payload["points"]] == [10.0, 12.0]
+    assert [p["instances"] for p in payload["points"]] == [10, 12]
+    for point in payload["points"]:
+        footprint = point["footprint"]
+        assert footprint["models"] == point["value"]
+        assert footprint["load_s"] > 0 and footprint["rss_mb"] > footprint["baseline_rss_mb"]
+        assert footprint["arrays_mb"]["distance field"] > 0
+    report = (out / "sweep_database_size.md").read_text()
+    assert "## Load time, memory and build time" in report
+    assert "| 12 |" in report
+
+
 def test_curves_without_local_geometry_are_a_failed_record(
     database_dir: Path, jobs: list[bench.Job], monkeypatch: pytest.MonkeyPatch
 ) -> None:

@@ -55,6 +55,7 @@ from tactile_sim.evaluation.benchmark_config import (
     SWEEPS,
     TIMED_OBJECT,
     BenchmarkConfig,
+    Sweep,
 )
 from tactile_sim.evaluation.databases import benchmark_database, mesh_files
 from tactile_sim.evaluation.reports import catalog_sessions_report, sensing_report, solids_report
@@ -289,23 +290,43 @@ def run_sweep(
         records = _records(config, _directory(database), jobs, path)
         results[value] = summarize(records)["fast"]
     stem = f"sweep_{config.sweep}"
-    payload = {
-        "parameter": sweep.parameter,
-        "figure": sweep.figure,
-        "date": started,
-        "machine": machine(),
-        "points": [{"value": v, **s.to_json()} for v, s in results.items()],
-    }
-    out = Path(config.report.out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    write_json_atomic(out / f"{stem}.json", payload)
-    sweep_figure(results, sweep.parameter, sweep.figure, out / f"{stem}.png")
     settings = (
         f"Instances: {syn.per_model} per model; unless swept, n = {syn.n_points} "
         f"points per curve at d = {syn.spacing_mm} mm, planes "
         f"{syn.plane_angle_deg:g} deg apart, noise sigma {syn.noise_mm} mm, "
         f"delta = {methods.delta_per_mm} 1/mm. Values: `{stem}.json`."
     )
+    return _write_sweep(config, sweep, stem, name, started, results, settings, echo=echo)
+
+
+def _write_sweep(
+    config: BenchmarkConfig,
+    sweep: Sweep,
+    stem: str,
+    name: str,
+    started: str,
+    results: Mapping[float, MethodSummary],
+    settings: str,
+    *,
+    extras: Mapping[float, dict[str, Any]] | None = None,
+    appendix: str = "",
+    echo: Echo = print,
+) -> dict[str, Any]:
+    """Writes a sweep's ``<stem>`` .json (each point with its ``extras``), .png and .md
+    (``appendix`` after the table); returns the JSON payload."""
+    payload = {
+        "parameter": sweep.parameter,
+        "figure": sweep.figure,
+        "date": started,
+        "machine": machine(),
+        "points": [
+            {"value": v, **s.to_json(), **(extras or {}).get(v, {})} for v, s in results.items()
+        ],
+    }
+    out = Path(config.report.out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    write_json_atomic(out / f"{stem}.json", payload)
+    sweep_figure(results, sweep.parameter, sweep.figure, out / f"{stem}.png")
     text = sweep_report(
         sweep.parameter,
         sweep.figure,
@@ -316,7 +337,7 @@ def run_sweep(
         f"{stem}.png",
         sweep.thesis,
     )
-    _write_report(config, f"{stem}.md", text, echo)
+    _write_report(config, f"{stem}.md", text + appendix, echo)
     return payload
 
 
@@ -342,38 +363,24 @@ def run_size_sweep(config: BenchmarkConfig, started: str, *, echo: Echo = print)
         footprints[size] = database_footprint(handle)
         del database
     stem = f"sweep_database_size{config.report.tag}"
-    payload = {
-        "parameter": sweep.parameter,
-        "figure": sweep.figure,
-        "date": started,
-        "machine": machine(),
-        "points": [
-            {"value": v, **s.to_json(), "footprint": footprints[int(v)]} for v, s in results.items()
-        ],
-    }
-    out = Path(config.report.out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    write_json_atomic(out / f"{stem}.json", payload)
-    sweep_figure(results, sweep.parameter, sweep.figure, out / f"{stem}.png")
     settings = (
         f"Instances: {syn.per_model} per catalog model and {syn.per_generated} per generated "
         f"model (the same at every size), n = {syn.n_points} points per curve at d = "
         f"{syn.spacing_mm} mm, planes {syn.plane_angle_deg:g} deg apart, noise sigma "
         f"{syn.noise_mm} mm, delta = {methods.delta_per_mm} 1/mm. Values: `{stem}.json`."
     )
-    text = sweep_report(
-        sweep.parameter,
-        sweep.figure,
+    return _write_sweep(
+        config,
+        sweep,
+        stem,
         "catalog and generated models",
-        _run_info(config, started),
-        settings,
+        started,
         results,
-        f"{stem}.png",
-        sweep.thesis,
+        settings,
+        extras={float(n): {"footprint": f} for n, f in footprints.items()},
+        appendix="\n## Load time, memory and build time\n\n" + footprint_table(footprints) + "\n",
+        echo=echo,
     )
-    text += "\n## Load time, memory and build time\n\n" + footprint_table(footprints) + "\n"
-    _write_report(config, f"{stem}.md", text, echo)
-    return payload
 
 
 def _sweep_points(
