@@ -33,10 +33,7 @@ class CurvatureTable:
     k1: NDArray[np.float64]
     k2: NDArray[np.float64]
     d1: NDArray[np.float64] | None = None
-    _tree: cKDTree = field(init=False, repr=False)
-
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "_tree", cKDTree(np.column_stack([self.k1, self.k2])))
+    _tree: cKDTree | None = field(default=None, init=False, repr=False)
 
     def __len__(self) -> int:
         return int(self.site.size)
@@ -60,6 +57,9 @@ class CurvatureTable:
         if np.isinf(delta):
             rows = np.arange(len(self))
         else:
+            if self._tree is None:  # at the first query: the fast mode's maps never need one
+                object.__setattr__(self, "_tree", cKDTree(np.column_stack([self.k1, self.k2])))
+            assert self._tree is not None
             rows = np.asarray(self._tree.query_ball_point([k1, k2], r=delta), dtype=np.int64)
         dist = np.hypot(self.k1[rows] - k1, self.k2[rows] - k2)
         keep = dist < delta

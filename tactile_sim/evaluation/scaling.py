@@ -10,7 +10,7 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-from recognition import ModelDatabase
+from recognition import ModelDatabase, RecognitionError
 from recognition.evaluation.instances import InstanceSpec
 from recognition.evaluation.synthetic_source import SyntheticSource, instance_specs
 from recognition.reproduction.tables import markdown_table
@@ -72,17 +72,15 @@ def database_footprint(directory: Path, repeats: int = 2) -> dict[str, Any]:
     resident memory after the load and before it (MB), the arrays by kind (MB) and the
     mean table build time per model (s, from the manifest) of the database in
     ``directory``."""
-    runs = [
-        json.loads(
-            subprocess.run(
-                [sys.executable, "-c", _FOOTPRINT, str(directory)],
-                check=True,
-                capture_output=True,
-                text=True,
-            ).stdout
+    runs = []
+    for _ in range(repeats):
+        done = subprocess.run(
+            [sys.executable, "-c", _FOOTPRINT, str(directory)], capture_output=True, text=True
         )
-        for _ in range(repeats)
-    ]
+        if done.returncode:
+            last = (done.stderr.strip().splitlines() or ["no message"])[-1]
+            raise RecognitionError(f"cannot measure the database in {directory}: {last}")
+        runs.append(json.loads(done.stdout))
     return min(runs, key=lambda r: r["load_s"])
 
 
