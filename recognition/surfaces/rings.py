@@ -43,6 +43,10 @@ RING_SAMPLES = 12
 #: band, or the surface folds back).
 NEWTON_STEPS = 4
 ON_SURFACE_M = 5.0e-5
+#: A ring sample counts where the surface is within this angle of the tangent plane.
+MAX_SLOPE_RAD = float(np.deg2rad(60.0))
+#: Samples a model's ring needs (of ``RING_SAMPLES``); the data's need five arms.
+MIN_RING_SAMPLES = 7
 #: Score scales: a descriptor component may differ by ``SCALE_FLOOR_M`` plus
 #: ``SCALE_RELATIVE`` of the data's mean height at that radius per standard unit; a ring
 #: the data have and the model lacks costs ``MISSING_COST`` per component; no component
@@ -74,42 +78,63 @@ def model_ring_descriptors(
     field: DistanceField, points: Array, normals: Array, directions: Array
 ) -> Array32:
     """(m, len(RADII_M), 2) float32 ring invariants of a model at ``points`` (m, 3), with
-    unit ``normals`` (m, 3) and tangent ``directions`` (m, 3), read off its distance field:
-    each ring sample is moved along the normal onto the surface (Newton on the field);
-    NaN where a ring leaves the field's band."""
+    unit ``normals`` (m, 3) and tangent ``directions`` (m, 3), read off its distance field.
+
+    Each ring sample is moved along the normal onto the surface (Newton on the field,
+    from the height of the ring inside scaled as rho^2). A sample counts where it lies on
+    the surface and the surface there is within ``MAX_SLOPE_RAD`` of the tangent plane
+    (over a fold or an edge, the height over the plane is not the surface the data
+    trace); the invariants are fitted to the samples that count, NaN where fewer than
+    ``MIN_RING_SAMPLES`` do. The data's rings are measured alike
+    (:func:`data_ring_descriptors`).
+    """
     stack = FieldStack.of([field])
     theta: Array = np.linspace(0.0, 2 * np.pi, RING_SAMPLES, endpoint=False)
     t1 = directions - normals * np.einsum("ij,ij->i", directions, normals)[:, None]
     t1 /= np.linalg.norm(t1, axis=1, keepdims=True)
     t2 = np.cross(normals, t1)
     out = np.empty((len(points), len(RADII_M), 2), np.float32)
-    design = np.linalg.pinv(_harmonics(theta))  # (5, RING_SAMPLES)
+    design = _harmonics(theta)  # (RING_SAMPLES, 5)
     for start in range(0, len(points), 4096):
         s = slice(start, start + 4096)
         ring = np.cos(theta)[:, None, None] * t1[s] + np.sin(theta)[:, None, None] * t2[s]
         ring = ring.transpose(1, 0, 2)  # (b, RING_SAMPLES, 3)
-        n = normals[s][:, None, :]
+        n = np.broadcast_to(normals[s][:, None, :], ring.shape)
         which = np.zeros(len(ring), np.int64)
+        h = np.zeros(ring.shape[:2])
+        inside = RADII_M[0]
         for k, rho in enumerate(RADII_M):
             base = points[s][:, None, :] + rho * ring
-            h = np.zeros(base.shape[:2])
+            h = np.nan_to_num(h) * (rho / inside) ** 2
             for _ in range(NEWTON_STEPS):
                 value, gradient = stack.value_and_gradient(base + h[..., None] * n, which)
-                slope = np.einsum("bpi,bpi->bp", gradient, np.broadcast_to(n, gradient.shape))
+                slope = np.einsum("bpi,bpi->bp", gradient, n)
                 h -= value / np.maximum(slope, 0.3)
-            miss = np.abs(stack(base + h[..., None] * n, which)) > ON_SURFACE_M
-            coef = h @ design.T  # (b, 5)
+            value, gradient = stack.value_and_gradient(base + h[..., None] * n, which)
+            gentle = np.einsum("bpi,bpi->bp", gradient, n) >= np.cos(MAX_SLOPE_RAD) * np.maximum(
+                np.linalg.norm(gradient, axis=-1), 1e-12
+            )
+            on = (np.abs(value) <= ON_SURFACE_M) & gentle
+            # least squares over the samples that count: (A' W A) c = A' W h
+            weighted = design[None] * on[..., None]
+            lhs = np.einsum("bpi,pj->bij", weighted, design) + 1e-9 * np.eye(5)
+            rhs = np.einsum("bpi,bp->bi", weighted, np.where(on, h, 0.0))
+            coef = np.linalg.solve(lhs, rhs[..., None])[..., 0]
             inv = np.stack([coef[:, 0], np.hypot(coef[:, 3], coef[:, 4])], axis=-1)
-            inv[miss.any(axis=1)] = np.nan
+            inv[on.sum(axis=1) < MIN_RING_SAMPLES] = np.nan
             out[s, k] = inv
+            h = np.where(on, h, np.nan)
+            inside = rho
     return out
 
 
 def data_ring_descriptors(curves: DataCurves, geometry: LocalSurfaceGeometry) -> Array:
     """(len(RADII_M), 2) ring invariants of the data about p in the frame of ``geometry``
     (d1, d2, N): on each arm of each curve, the point whose distance from p in the
-    tangent plane is the radius, interpolated; NaN at a radius fewer than five arms reach."""
+    tangent plane first reaches the radius, interpolated, where the arm rises or falls
+    there by less than ``MAX_SLOPE_RAD``; NaN at a radius fewer than five arms give."""
     p, frame = geometry.point, geometry.frame
+    steep = np.tan(MAX_SLOPE_RAD)
     samples: list[list[tuple[float, float]]] = [[] for _ in RADII_M]
     for c in curves.curves:
         m = int(np.argmin(np.linalg.norm(c - p, axis=1)))
@@ -121,6 +146,8 @@ def data_ring_descriptors(curves: DataCurves, geometry: LocalSurfaceGeometry) ->
                 if not crossing.size:
                     continue
                 i = crossing[0]
+                if abs(q[i + 1, 2] - q[i, 2]) > steep * (r[i + 1] - r[i]):
+                    continue
                 at = q[i] + (rho - r[i]) / (r[i + 1] - r[i]) * (q[i + 1] - q[i])
                 samples[k].append((float(np.arctan2(at[1], at[0])), float(at[2])))
     out = np.full((len(RADII_M), 2), np.nan)

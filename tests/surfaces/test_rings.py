@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 from testing_meshes import blob, ellipsoid, sphere
 
+from recognition.surfaces.data_curves import DataCurves
 from recognition.surfaces.database import ModelDatabase
 from recognition.surfaces.mesh_model import MeshModel
 from recognition.surfaces.registration import FastConfig, data_geometry
@@ -119,3 +120,19 @@ def test_a_small_budget_still_recognises_and_locates():
     result = database.recognize(synthetic.curves, tight)
     assert result.name == "blob"
     np.testing.assert_allclose(result.location, synthetic.point_in_model, atol=0.1e-3)
+
+
+def test_an_arm_that_drops_over_an_edge_gives_no_ring_sample():
+    """Three lines on a plane; one arm falls off a step 5.5 mm out: at the 6 mm ring
+    that arm is steep and left out, so the ring is the plane's (height 0)."""
+    s = np.linspace(-8e-3, 8e-3, 81)
+    curves = []
+    for angle in (0.0, np.pi / 3, 2 * np.pi / 3):
+        c = np.stack([np.cos(angle) * s, np.sin(angle) * s, np.zeros_like(s)], axis=1)
+        if angle == 0.0:
+            c[:, 2] = np.where(s > 5.5e-3, -(s - 5.5e-3) * 4.0, 0.0)  # 76 degrees down
+        curves.append(c)
+    data_curves = DataCurves(tuple(curves), approach=np.array([0.0, 0.0, -1.0]))
+    geometry = data_geometry(data_curves)
+    rings = data_ring_descriptors(data_curves, geometry)
+    assert abs(rings[1, 0]) < 1e-6 and abs(rings[1, 1]) < 1e-6
