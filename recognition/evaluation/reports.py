@@ -27,6 +27,9 @@ __all__ = [
     "sweep_report",
 ]
 
+#: Databases of more models than this get no model-by-object matrices in their report.
+MAX_MATRIX_MODELS = 20
+
 
 def machine() -> str:
     """The machine a report was measured on: architecture, cores, Python."""
@@ -180,7 +183,13 @@ def catalog_report(
                 ]
     names = database.names
     first = {r.model: r for r in records if r.method == "fast" and r.instance.endswith("/0")}
-    if first:
+    if first and len(names) > MAX_MATRIX_MODELS:
+        lines += [
+            "",
+            f"Tables 4.6-4.7 analogues (every model against every object) left out for "
+            f"{len(names)} models; the records hold every model's error and time.",
+        ]
+    elif first:
         lines += [
             "",
             "## Registration errors (mm), Table 4.6 analogue (fast, instance 0 of "

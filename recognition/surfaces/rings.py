@@ -29,6 +29,7 @@ __all__ = [
     "model_ring_descriptors",
     "ring_invariants",
     "ring_scores",
+    "ring_weights",
 ]
 
 Array = NDArray[np.float64]
@@ -158,17 +159,26 @@ def data_ring_descriptors(curves: DataCurves, geometry: LocalSurfaceGeometry) ->
     return out
 
 
+def ring_weights(data: Array) -> Array:
+    """(K,) the reciprocal scale of each radius' components in :func:`ring_scores`:
+    1 / (``SCALE_FLOOR_M + SCALE_RELATIVE * |a0|``), 0 at radii the data do not reach."""
+    reached = np.isfinite(data).all(axis=1)
+    scale = SCALE_FLOOR_M + SCALE_RELATIVE * np.abs(np.nan_to_num(data[:, 0]))
+    return np.where(reached, 1.0 / scale, 0.0)
+
+
 def ring_scores(models: Array32, data: Array) -> Array:
     """(m,) squared standardised distance of models' ring descriptors (m, K, 2) from the
     data's (K, 2), over the radii the data reach: each component scaled by
     ``SCALE_FLOOR_M + SCALE_RELATIVE * |a0|`` (the data's mean height at that radius),
     ``MISSING_COST`` per component where the model's ring is undefined, at most
     ``MAX_COST`` per component."""
-    reached = np.flatnonzero(np.isfinite(data).all(axis=1))
-    total = np.zeros(len(models), np.float32)
-    for k in reached:
-        scale = SCALE_FLOOR_M + SCALE_RELATIVE * abs(data[k, 0])
-        for c in range(2):
-            z = (models[:, k, c] - np.float32(data[k, c])) * np.float32(1.0 / scale)
-            total += np.where(np.isnan(z), np.float32(MISSING_COST), np.minimum(z * z, MAX_COST))
-    return total.astype(np.float64)
+    from recognition.surfaces import field_kernels  # numba: imported when first needed
+
+    return field_kernels.ring_scores(
+        np.ascontiguousarray(models, np.float32),
+        np.nan_to_num(np.asarray(data, np.float64)),
+        ring_weights(np.asarray(data, np.float64)),
+        MISSING_COST,
+        MAX_COST,
+    ).astype(np.float64)

@@ -11,7 +11,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from recognition.surfaces.local_geometry import LocalSurfaceGeometry
 from recognition.surfaces.mesh_model import MeshModel
-from recognition.surfaces.rings import ring_scores
+from recognition.surfaces.rings import MAX_COST, MISSING_COST, ring_weights
 
 __all__ = ["CandidateIndex", "one_per_cell", "smallest"]
 
@@ -19,7 +19,7 @@ Array = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 
 
-def smallest(values: Array, count: int | float) -> NDArray[np.intp]:
+def smallest(values: NDArray[np.floating], count: int | float) -> NDArray[np.intp]:
     """Indices of the ``count`` smallest values (all if fewer), in no particular order."""
     if count >= values.size:
         return np.arange(values.size)
@@ -74,19 +74,31 @@ class CandidateIndex:
         The rows within ``tolerance`` (1/m; inf: every row) of the data's (k1, k2)
         (4.7); over ``budget`` of them (None: no limit) across all the models, those of
         least score: the ring score (:func:`~recognition.surfaces.rings.ring_scores`)
-        plus the squared curvature distance in tolerances. A model without a row within
-        the tolerance is rejected at table lookup; one whose rows the budget left out
-        is not.
+        plus the squared curvature distance in tolerances, in one compiled pass
+        (:func:`~recognition.surfaces.field_kernels.candidate_scores`). A model without a
+        row within the tolerance is rejected at table lookup; one whose rows the budget
+        left out is not.
         """
+        from recognition.surfaces import field_kernels  # numba: imported when first needed
+
         allowed = np.zeros(int(self.owner.max()) + 1, bool)
         allowed[fields] = True
-        dist = np.hypot(self.k1 - geometry.k1, self.k2 - geometry.k2)
-        keep = np.flatnonzero(allowed[self.owner] & (dist < tolerance))
+        keep, score = field_kernels.candidate_scores(
+            self.owner,
+            self.k1,
+            self.k2,
+            self.rings,
+            allowed,
+            float(geometry.k1),
+            float(geometry.k2),
+            float(tolerance),
+            np.nan_to_num(data_rings),
+            ring_weights(data_rings),
+            MISSING_COST,
+            MAX_COST,
+        )
         matched = np.bincount(self.owner[keep], minlength=len(allowed))[fields] > 0
         if budget is not None and keep.size > budget:
-            score = ring_scores(self.rings[keep], data_rings)
-            if np.isfinite(tolerance):
-                score += (dist[keep] / tolerance) ** 2
             keep = np.sort(keep[smallest(score, budget)])
         keep = keep[np.argsort(self.owner[keep], kind="stable")]
         owner = self.owner[keep]
