@@ -508,6 +508,7 @@ def test_the_database_size_sweep_reports_success_time_and_footprint(
         footprint = point["footprint"]
         assert footprint["models"] == point["value"]
         assert footprint["load_s"] > 0 and footprint["rss_mb"] > footprint["baseline_rss_mb"]
+        assert footprint["in_use_rss_mb"] > footprint["rss_mb"]
         assert footprint["arrays_mb"]["distance field"] > 0
     report = (out / "sweep_database_size.md").read_text()
     assert "## Load time, memory and build time" in report
