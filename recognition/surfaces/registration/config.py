@@ -100,6 +100,9 @@ class FastSearchConfig:
     screened_budget : int or None
         Screened poses kept across the database, at most (the best by the screening
         score, no more than ``n_screened`` of a model); None: ``n_screened`` per model.
+    coarse_models, final_models : int or None
+        Models that go on to the coarse and to the final stage, at most: those of least
+        RMS residual after the stage before (the others pruned); None: no limit.
     """
 
     tolerance_scale: float = 1.0
@@ -120,6 +123,8 @@ class FastSearchConfig:
     final_iterations: int = 25
     candidate_budget: int | None = 20_000
     screened_budget: int | None = 1536
+    coarse_models: int | None = 16
+    final_models: int | None = 10
 
 
 #: The first denser pass run when no model fits well enough (see FastConfig.fallbacks):

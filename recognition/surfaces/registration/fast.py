@@ -351,9 +351,12 @@ def _search(
 
     status = [RegistrationStatus.CONVERGED] * n
 
-    def prune(poses: list[_Poses | None], ratio: float | None) -> list[_Poses | None]:
+    def prune(
+        poses: list[_Poses | None], ratio: float | None, most: int | None
+    ) -> list[_Poses | None]:
         """The poses of the models still running whose best RMS is within ``ratio`` of
-        the best model's (None for the others, now pruned)."""
+        the best model's, at most the ``most`` best models (None for the others, now
+        pruned)."""
         rms = {
             w: float(p.rms.min())
             for w, p in enumerate(poses)
@@ -364,6 +367,9 @@ def _search(
             for w, value in rms.items():
                 if value > ratio * best:
                     status[w] = RegistrationStatus.PRUNED
+        if most is not None:
+            for w in sorted(rms, key=rms.__getitem__)[most:]:
+                status[w] = RegistrationStatus.PRUNED
         return [
             p if s is RegistrationStatus.CONVERGED else None
             for p, s in zip(poses, status, strict=True)
@@ -373,13 +379,13 @@ def _search(
         [p for p, _, _ in screened], points[screen_idx], search.screen_iterations, threshold_m
     )
     coarse = batched(
-        distinct(prune(first, config.screen_prune_ratio), search.n_coarse),
+        distinct(prune(first, config.screen_prune_ratio, search.coarse_models), search.n_coarse),
         points[coarse_idx],
         search.coarse_iterations,
         threshold_m,
     )
     final = batched(
-        distinct(prune(coarse, config.prune_ratio), search.n_final),
+        distinct(prune(coarse, config.prune_ratio, search.final_models), search.n_final),
         points,
         search.final_iterations,
         threshold_m,
