@@ -44,33 +44,28 @@ def test_a_sphere_s_rings_are_its_exact_heights(ball):
     assert np.abs(ball.rings[:, :, 1]).max() < 0.03e-3  # isotropic
 
 
-def test_data_rings_match_the_model_s_at_the_true_place(ball):
-    vertex = 100
+def _rings_of_exact_curves(model, vertex, n_points):
+    """The data's rings of exact curves (0.4 mm apart) through ``vertex``."""
     curves = mesh_data_curves(
-        ball.mesh,
+        model.mesh,
         vertex,
-        normal=ball.normals[vertex],
-        n_points=41,
+        normal=model.normals[vertex],
+        n_points=n_points,
         spacing_m=0.4e-3,
         noise_std_m=0.0,
         transform=False,
     ).curves
-    data = data_ring_descriptors(curves, data_geometry(curves))
+    return data_ring_descriptors(curves, data_geometry(curves))
+
+
+def test_data_rings_match_the_model_s_at_the_true_place(ball):
+    data = _rings_of_exact_curves(ball, 100, 41)
     expected = [_sphere_height(0.03, rho) for rho in RADII_M]
     # arms 8 mm long reach the 3 and 6 mm rings only
     np.testing.assert_allclose(data[:2, 0], expected[:2], atol=0.02e-3)
     assert np.isnan(data[2]).all()
     # arms of 4 mm, the 3 mm ring only
-    short = mesh_data_curves(
-        ball.mesh,
-        vertex,
-        normal=ball.normals[vertex],
-        n_points=21,
-        spacing_m=0.4e-3,
-        noise_std_m=0.0,
-        transform=False,
-    ).curves
-    assert np.isnan(data_ring_descriptors(short, data_geometry(short))[1:]).all()
+    assert np.isnan(_rings_of_exact_curves(ball, 100, 21)[1:]).all()
 
 
 def test_scores_rank_the_matching_surface_first_and_bound_a_spoiled_ring():
