@@ -254,8 +254,11 @@ def run_synthetic(
     payload = summary_json(summary)
     if config.report.json_path:
         write_json_atomic(config.report.json_path, payload)
+    each = "model"
+    if syn.database_size is not None:
+        each = f"catalog model and {syn.per_generated} per generated model"
     settings = (
-        f"Instances: {syn.per_model} per model, n = {syn.n_points} points per curve at "
+        f"Instances: {syn.per_model} per {each}, n = {syn.n_points} points per curve at "
         f"d = {syn.spacing_mm} mm (l = {(syn.n_points - 1) * syn.spacing_mm:g} mm), "
         f"planes {syn.plane_angle_deg:g} deg apart, noise sigma {syn.noise_mm} mm, "
         f"delta = {methods.delta_per_mm} 1/mm. Thesis mode on the first "
