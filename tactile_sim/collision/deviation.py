@@ -52,8 +52,9 @@ def hull_surface_deviation(
 
     Points are sampled uniformly (by area) on every part's hull; those strictly inside
     another part are dropped (they are not on the union's surface, which is what a probe
-    can touch); the rest are measured against the mesh with libigl's AABB tree (exact
-    point-triangle distances; ``trimesh.proximity`` is not reliable at this scale).
+    can touch); the rest are measured against the mesh by exact point-triangle distances
+    (:class:`~recognition.surfaces.distance.MeshDistance`; ``trimesh.proximity`` is not
+    reliable at this scale).
 
     Parameters
     ----------

@@ -2,7 +2,8 @@
 
 :func:`sensing_accuracy` probes objects and measures every sensed point against the
 surface MuJoCo touched and against the object's mesh, and MuJoCo's contact points
-against the mesh (libigl AABB: exact point-triangle distances; not
+against the mesh (:class:`~recognition.surfaces.distance.MeshDistance`: exact point-triangle
+distances; not
 ``trimesh.proximity``, which is wrong at this scale). :func:`session_timing` measures
 the wall time of warm probing sessions, :func:`probe_script_seconds` that of
 ``scripts/probe.py`` as a user runs it; :func:`collision_report` the collision parts.

@@ -13,6 +13,6 @@ __all__ = ["mesh_distance"]
 @functools.lru_cache(maxsize=4)
 def mesh_distance(name: str) -> MeshDistance:
     """Returns exact closest points on the mesh of the catalog object or solid ``name``
-    (model frame; libigl AABB tree), kept for the next call."""
+    (model frame), kept for the next call."""
     mesh = resolve_object(name, progress=False).mesh
     return MeshDistance(mesh.vertices, mesh.faces)

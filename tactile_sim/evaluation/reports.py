@@ -352,8 +352,8 @@ def sensing_report(
             *run.header("Simulated sensing: accuracy and speed", workers=False),
             f"{len(objects)} objects x {sessions} sessions (3 sweeps x 21 points at "
             "1.2 mm, random pose, p and plane yaw per seed; seeds from "
-            f"--seed {seed}). Distances to the meshes by libigl's AABB "
-            "(exact point-triangle), over the probed regions only.",
+            f"--seed {seed}). Distances to the meshes are exact "
+            "(point-triangle), over the probed regions only.",
             "",
             "## Errors of the sensed points (mm)",
             "",

@@ -1,7 +1,8 @@
 """The compiled probing scene with one object, and queries on the object's original mesh.
 
 The experimenter's plan, the tip's contact and the ground truth query the mesh (closest
-points, first ray hits, face normals) with libigl AABB trees, built on first use; the
+points by :class:`~recognition.surfaces.distance.MeshDistance`, first ray hits by libigl's
+AABB tree, face normals), built on first use; the
 sensor never does.
 """
 
@@ -62,8 +63,7 @@ class ProbeScene:
 
     @property
     def mesh_distance(self) -> MeshDistance:
-        """Exact closest points on the original mesh (model frame; libigl AABB tree built on
-        first use)."""
+        """Exact closest points on the original mesh (model frame; built on first use)."""
         if self._mesh_distance is None:
             self._mesh_distance = MeshDistance(self.target.mesh.vertices, self.target.mesh.faces)
         return self._mesh_distance
@@ -147,8 +147,7 @@ class ProbeScene:
         self, points_in_world: ArrayLike
     ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Returns the closest points of the original mesh (world frame) and their
-        distances (metres) for (k, 3) world points; libigl AABB, exact point-triangle
-        distances."""
+        distances (metres) for (k, 3) world points; exact point-triangle distances."""
         T = self.T_world_from_object
         points = np.asarray(points_in_world, dtype=np.float64).reshape(-1, 3)
         distance, closest, _ = self.mesh_distance.closest((points - T[:3, 3]) @ T[:3, :3])

@@ -7,7 +7,8 @@ the surface is nearest its centre c: the sphere-mesh contact is the contact with
 tangent plane at that nearest point q, at distance |c - q| - r along (c - q) / |c - q|.
 :class:`TipContact` keeps a mocap box (:func:`tactile_sim.scene.add_tip_contact`, the only
 geom the tip collides with besides the table) with its top face on that plane, the nearest
-point found on the exact mesh (libigl AABB tree) before each step. The convex parts still
+point found on the exact mesh (:class:`~recognition.surfaces.distance.MeshDistance`) before
+each step. The convex parts still
 collide with the probe's housing and shaft.
 
 The nearest point is looked up again only when the tip may be in contact (within

@@ -1,0 +1,100 @@
+"""Exact closest points on meshes (the grid of cell lists) against libigl's AABB tree."""
+
+import igl
+import numpy as np
+import pytest
+import trimesh
+from testing_meshes import blob, cylinder, torus
+
+from recognition.surfaces.distance import MeshDistance
+
+
+def reference(vertices: np.ndarray, faces: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """Distances by libigl (an independent exact implementation)."""
+    d2, _, _ = igl.point_mesh_squared_distance(points, vertices, faces)
+    return np.sqrt(d2)
+
+
+def queries(mesh: trimesh.Trimesh, rng: np.random.Generator) -> np.ndarray:
+    """Points on, near, inside, far from and well outside the mesh's bounding box."""
+    v = mesh.vertices[rng.integers(len(mesh.vertices), size=300)]
+    size = float(np.ptp(mesh.vertices, axis=0).max())
+    return np.concatenate(
+        [
+            v,
+            v + rng.normal(scale=1e-5, size=v.shape),
+            v + rng.normal(scale=1e-3, size=v.shape),
+            v + rng.normal(scale=0.3 * size, size=v.shape),
+            rng.normal(scale=3 * size, size=(30, 3)),
+            mesh.vertices.mean(axis=0) + rng.normal(scale=1e-4, size=(30, 3)),
+        ]
+    )
+
+
+def assert_exact(mesh: trimesh.Trimesh, points: np.ndarray) -> None:
+    vertices, faces = np.asarray(mesh.vertices), np.asarray(mesh.faces)
+    d, q, f = MeshDistance(vertices, faces).closest(points)
+    np.testing.assert_allclose(d, reference(vertices, faces, points), rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(np.linalg.norm(points - q, axis=1), d, rtol=1e-12, atol=1e-15)
+    # the closest point lies on the face named, in its plane and within its corners
+    tri = vertices[faces[f]]
+    normal = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    normal /= np.linalg.norm(normal, axis=1, keepdims=True)
+    assert np.all(np.abs(np.einsum("ij,ij->i", q - tri[:, 0], normal)) < 1e-12)
+    e1, e2, r = tri[:, 0] - tri[:, 2], tri[:, 1] - tri[:, 2], q - tri[:, 2]
+    gram = np.stack(
+        [
+            np.einsum("ij,ij->i", e1, e1),
+            np.einsum("ij,ij->i", e1, e2),
+            np.einsum("ij,ij->i", e2, e2),
+        ]
+    )
+    rhs = np.stack([np.einsum("ij,ij->i", e1, r), np.einsum("ij,ij->i", e2, r)])
+    det = gram[0] * gram[2] - gram[1] ** 2
+    u = (gram[2] * rhs[0] - gram[1] * rhs[1]) / det
+    w = (gram[0] * rhs[1] - gram[1] * rhs[0]) / det
+    assert np.all(u >= -1e-9) and np.all(w >= -1e-9) and np.all(u + w <= 1 + 1e-9)
+
+
+def small_cylinder() -> trimesh.Trimesh:
+    """A cylinder with long thin triangles on its caps."""
+    return cylinder(n_theta=60, n_z=40, n_cap=8)
+
+
+@pytest.mark.parametrize("make", [blob, torus, small_cylinder], ids=["blob", "torus", "cylinder"])
+def test_closest_points_are_exact_at_every_distance(make):
+    mesh = make()
+    assert_exact(mesh, queries(mesh, np.random.default_rng(0)))
+
+
+def test_closest_points_are_exact_among_triangles_of_very_different_sizes():
+    # a box of two-triangle faces with one face finely subdivided: the cells must grow
+    box = trimesh.creation.box(extents=(0.3, 0.02, 0.01))
+    fine = box.subdivide_to_size(0.001)
+    vertices = np.concatenate([box.vertices, fine.vertices[fine.faces[:2000]].reshape(-1, 3)])
+    faces = np.concatenate([box.faces, len(box.vertices) + np.arange(6000).reshape(-1, 3)])
+    mixed = trimesh.Trimesh(vertices, faces, process=False)
+    assert_exact(mixed, queries(mixed, np.random.default_rng(1)))
+
+
+def test_a_single_triangle_and_a_degenerate_one():
+    points = np.random.default_rng(2).normal(scale=0.05, size=(500, 3))
+    one = trimesh.Trimesh([[0, 0, 0], [0.01, 0, 0], [0, 0.02, 0]], [[0, 1, 2]], process=False)
+    assert_exact(one, points)
+    flat = np.array([[0.0, 0, 0], [0.01, 0, 0], [0.02, 0, 0], [0, 0.01, 0.001]])
+    d, _, _ = MeshDistance(flat, [[0, 1, 2], [0, 1, 3]]).closest(points)
+    np.testing.assert_allclose(d, reference(flat, np.array([[0, 1, 2], [0, 1, 3]]), points))
+
+
+def test_points_that_are_not_finite_get_no_answer():
+    mesh = blob(subdivisions=3)
+    d, q, f = MeshDistance(mesh.vertices, mesh.faces).closest(
+        [[np.nan, 0, 0], [0, np.inf, 0], [0, 0, 0.1]]
+    )
+    assert np.isnan(d[:2]).all() and np.isnan(q[:2]).all() and list(f[:2]) == [-1, -1]
+    assert np.isfinite(d[2]) and f[2] >= 0
+
+
+def test_a_mesh_without_faces_is_refused():
+    with pytest.raises(ValueError, match="faces"):
+        MeshDistance(np.zeros((3, 3)), np.zeros((0, 3), int))
