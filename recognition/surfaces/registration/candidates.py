@@ -1,5 +1,5 @@
 """The fast mode's candidates: the lookup (4.7) over every model of a database at once,
-ranked by ring descriptors within a budget, thinned to one per cell."""
+ranked by ring descriptors within a budget."""
 
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ from recognition.surfaces.local_geometry import LocalSurfaceGeometry
 from recognition.surfaces.mesh_model import MeshModel
 from recognition.surfaces.rings import MAX_COST, MISSING_COST, ring_weights
 
-__all__ = ["CandidateIndex", "one_per_cell", "smallest"]
+__all__ = ["CandidateIndex", "smallest"]
 
 Array = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -105,20 +105,3 @@ class CandidateIndex:
         starts = np.searchsorted(owner, fields, side="left")
         ends = np.searchsorted(owner, fields, side="right")
         return [self.row[keep[a:b]] for a, b in zip(starts, ends, strict=True)], matched
-
-
-def one_per_cell(
-    model: MeshModel, geometry: LocalSurfaceGeometry, rows: IntArray, spacing: float
-) -> IntArray:
-    """Of the candidate map's ``rows``, the one nearest the data's (k1, k2) in each cubic
-    cell of side ``spacing`` (metres), so that candidates cover every matching region
-    about evenly."""
-    if rows.size == 0:
-        return rows
-    pool = model.candidate_curvatures
-    dist = np.hypot(pool.k1[rows] - geometry.k1, pool.k2[rows] - geometry.k2)
-    cell = model.cell_keys(spacing)[pool.site[rows]]
-    order = np.lexsort((dist, cell))
-    first = np.ones(order.size, bool)
-    first[1:] = cell[order[1:]] != cell[order[:-1]]
-    return rows[order[first]]

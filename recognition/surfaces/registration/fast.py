@@ -32,19 +32,19 @@ from __future__ import annotations
 
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import replace
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from recognition.least_squares import LeastSquaresConfig, State, damped_least_squares
-from recognition.rigid import pose_matrix, rotation_about, rotation_from_vector
+from recognition.rigid import pose_matrix, rotation_from_vector
 from recognition.surfaces.data_curves import DataCurves
 from recognition.surfaces.distance import FieldStack
 from recognition.surfaces.local_geometry import LocalSurfaceGeometry
 from recognition.surfaces.mesh_model import MeshModel
 from recognition.surfaces.registration.ambiguity import Resolution, distinct_poses
-from recognition.surfaces.registration.candidates import CandidateIndex, one_per_cell, smallest
+from recognition.surfaces.registration.candidates import CandidateIndex
 from recognition.surfaces.registration.config import FastConfig, FastSearchConfig
 from recognition.surfaces.registration.data import (
     acceptable_error_m,
@@ -59,23 +59,12 @@ from recognition.surfaces.registration.result import (
     RegistrationStatus,
     rejected,
 )
-from recognition.surfaces.registration.superposition import frames, hypotheses
-from recognition.surfaces.rings import data_ring_descriptors
+from recognition.surfaces.registration.screening import Poses, arm_indices, screen
 
 __all__ = ["register_fast"]
 
 Array = NDArray[np.float64]
 IntArray = NDArray[np.int64]
-
-
-@dataclass(frozen=True)
-class _Poses:
-    """A model's poses at one stage of the search: R (k, 3, 3), t (k, 3), and their RMS
-    residual (k,) once refined."""
-
-    R: Array
-    t: Array
-    rms: Array | None = None
 
 
 #: With a clip, a start's points count at most this many robust standard deviations of
@@ -151,138 +140,6 @@ def _gauss_newton(
     return result.state[0], result.state[1], np.sqrt(result.cost), trace
 
 
-def _arm_indices(curves: DataCurves, point: Array, fractions: Sequence[float] | Array) -> IntArray:
-    """Indices into ``curves.points`` of the points at ``fractions`` of each arm's length.
-
-    An arm runs from the point of a curve nearest p to one of its ends; the result holds,
-    per curve and fraction, the index on the forward arm then on the backward arm. A curve
-    that p ends (a sweep truncated on one side) has one arm only: both samples of a
-    fraction f then lie on it, at f and f / 2.
-    """
-    idx, offset = [], 0
-    for c in curves.curves:
-        m = int(np.argmin(np.linalg.norm(c - point, axis=1)))
-        n = len(c)
-        ahead, behind = n - 1 - m, m
-        for f in fractions:
-            if ahead == 0 or behind == 0:
-                arm, sign = (ahead, 1) if ahead > 0 else (behind, -1)
-                for g in (f, f / 2):
-                    idx.append(offset + m + sign * max(1, round(g * arm)))
-                continue
-            idx.append(offset + min(n - 1, m + max(1, round(f * ahead))))
-            idx.append(offset + max(0, m - max(1, round(f * behind))))
-        offset += n
-    return np.array(idx, dtype=np.int64)
-
-
-def _screen(
-    models: Sequence[MeshModel],
-    stack: FieldStack,
-    which_field: IntArray,
-    curves: DataCurves,
-    geometry: LocalSurfaceGeometry,
-    config: FastConfig,
-    search: FastSearchConfig,
-    log: Array,
-    index: CandidateIndex,
-) -> list[tuple[_Poses | None, NDArray[np.int64], bool]]:
-    """Stage 1: candidate poses of every model, scored on the screening points.
-
-    The candidates come from all the models at once (:meth:`CandidateIndex.select`,
-    within the ``candidate_budget``), one per cell. Every pose is first
-    scored on the prescreening points; the best ``prescreen_keep`` of them (at least
-    ``n_screened``) are scored again on the screening points. Returns, per model, its
-    best ``n_screened`` poses (with a ``screened_budget``, only those among the best of
-    all models; None without candidates), the candidate vertices, and whether it had
-    candidates within the lookup tolerance (False: rejected at table lookup).
-    """
-    points = curves.points[_arm_indices(curves, geometry.point, search.arm_fractions)]
-    pre_points = curves.points[_arm_indices(curves, geometry.point, search.prescreen_fractions)]
-    best_R: list[list[Array]] = [[] for _ in models]
-    best_t: list[list[Array]] = [[] for _ in models]
-    best_s: list[list[Array]] = [[] for _ in models]
-    candidates: list[list[NDArray[np.int64]]] = [[] for _ in models]
-    matched = np.zeros(len(models), bool)
-    half = np.arange(
-        -search.aligned_window_rad, search.aligned_window_rad + 1e-9, search.aligned_step_rad
-    )
-    aligned_phis = np.concatenate([half, np.pi + half])
-    scan_phis = np.arange(0.0, 2 * np.pi - 1e-9, search.scan_step_rad)
-    for hyp in hypotheses(geometry):
-        tolerance = search.tolerance_scale * (
-            config.delta + config.relative_delta * max(abs(hyp.k1), abs(hyp.k2))
-        )
-        local = (points - hyp.point) @ hyp.frame  # (P, 3) in the data's (d1, d2, N) frame
-        pre_local = (pre_points - hyp.point) @ hyp.frame
-        data_anisotropic = hyp.k1 - hyp.k2 >= search.aligned_anisotropy
-        start = time.perf_counter()
-        chosen, within = index.select(
-            hyp,
-            data_ring_descriptors(curves, hyp),
-            tolerance,
-            search.candidate_budget,
-            which_field,
-        )
-        matched |= within
-        log += (time.perf_counter() - start) / len(models)
-        for w, model in enumerate(models):
-            start = time.perf_counter()
-            pool = model.candidate_curvatures
-            rows = one_per_cell(model, hyp, chosen[w], search.candidate_spacing_m)
-            candidates[w].append(pool.site[rows])
-            if rows.size == 0:
-                log[w] += time.perf_counter() - start
-                continue
-            aligned = data_anisotropic & (
-                pool.k1[rows] - pool.k2[rows] >= search.aligned_anisotropy
-            )
-            for mask, phis in ((aligned, aligned_phis), (~aligned, scan_phis)):
-                if not mask.any():
-                    continue
-                v = pool.site[rows[mask]]
-                assert pool.d1 is not None  # the candidate map carries principal directions
-                F = frames(model.normals[v], pool.d1[rows[mask]])
-                turns = rotation_about(2, phis)
-                patterns = np.einsum("fij,pj->fpi", turns, local)  # (F, P, 3)
-                pre_patterns = np.einsum("fij,pj->fpi", turns, pre_local)
-                which = np.full(len(v), which_field[w])
-                origins = model.vertices[v]
-                pre = np.abs(stack.nearest_in_frames(which, F, origins, pre_patterns))
-                pre = pre.mean(axis=-1).ravel()
-                count = max(search.n_screened, int(np.ceil(search.prescreen_keep * pre.size)))
-                c, f = np.divmod(smallest(pre, count), len(phis))
-                score = np.abs(
-                    stack.nearest_in_frames(which[c], F[c], origins[c], patterns[f], paired=True)
-                ).mean(axis=-1)
-                keep = smallest(score, search.n_screened)
-                c, f, score = c[keep], f[keep], score[keep]
-                R = F[c] @ turns[f] @ hyp.frame.T
-                best_R[w].append(R)
-                best_t[w].append(origins[c] - R @ hyp.point)
-                best_s[w].append(score)
-            log[w] += time.perf_counter() - start
-    scores = [np.concatenate(x) if x else np.zeros(0) for x in best_s]
-    cutoff = np.inf
-    if search.screened_budget is not None:
-        ranked = np.concatenate(
-            [np.sort(x, kind="stable")[: search.n_screened] for x in scores] or [np.zeros(0)]
-        )
-        if ranked.size > search.screened_budget:
-            cutoff = np.partition(ranked, search.screened_budget - 1)[search.screened_budget - 1]
-    out: list[tuple[_Poses | None, NDArray[np.int64], bool]] = []
-    for w in range(len(models)):
-        cands = np.concatenate(candidates[w]) if candidates[w] else np.zeros(0, np.int64)
-        keep = np.argsort(scores[w], kind="stable")[: search.n_screened]
-        keep = keep[scores[w][keep] <= cutoff]
-        if not keep.size:
-            out.append((None, cands, bool(matched[w])))
-            continue
-        R, t = (np.concatenate(x) for x in (best_R[w], best_t[w]))
-        out.append((_Poses(R[keep], t[keep]), cands, bool(matched[w])))
-    return out
-
-
 def _search(
     models: Sequence[MeshModel],
     stack: FieldStack,
@@ -304,14 +161,14 @@ def _search(
     seconds = np.zeros(n)
     iterations = np.zeros(n, dtype=np.int64)
     points = curves.points
-    screen_idx = _arm_indices(curves, geometry.point, search.arm_fractions)
+    screen_idx = arm_indices(curves, geometry.point, search.arm_fractions)
     fractions = np.arange(1, search.coarse_per_arm + 1) / search.coarse_per_arm
-    coarse_idx = np.unique(_arm_indices(curves, geometry.point, fractions))
-    screened = _screen(models, stack, which_field, curves, geometry, config, search, seconds, index)
+    coarse_idx = np.unique(arm_indices(curves, geometry.point, fractions))
+    screened = screen(models, stack, which_field, curves, geometry, config, search, seconds, index)
 
     def batched(
-        poses: list[_Poses | None], stage_points: Array, steps: int, clip_m: float | None = None
-    ) -> list[_Poses | None]:
+        poses: list[Poses | None], stage_points: Array, steps: int, clip_m: float | None = None
+    ) -> list[Poses | None]:
         """Gauss-Newton of every model's poses in one batch; time shared by pose count."""
         live = [(w, p) for w, p in enumerate(poses) if p is not None]
         if not live:
@@ -333,11 +190,11 @@ def _search(
         out = list(poses)
         for w, _ in live:
             sel = owner == w
-            out[w] = _Poses(R[sel], t[sel], rms[sel])
+            out[w] = Poses(R[sel], t[sel], rms[sel])
         return out
 
-    def distinct(poses: list[_Poses | None], n_keep: int) -> list[_Poses | None]:
-        out: list[_Poses | None] = []
+    def distinct(poses: list[Poses | None], n_keep: int) -> list[Poses | None]:
+        out: list[Poses | None] = []
         for w, p in enumerate(poses):
             if p is None:
                 out.append(None)
@@ -345,15 +202,15 @@ def _search(
             assert p.rms is not None  # refined poses
             start = time.perf_counter()
             keep = distinct_poses(p.R, p.t, p.rms, geometry.point, n_keep)
-            out.append(_Poses(p.R[keep], p.t[keep]))
+            out.append(Poses(p.R[keep], p.t[keep]))
             seconds[w] += time.perf_counter() - start
         return out
 
     status = [RegistrationStatus.CONVERGED] * n
 
     def prune(
-        poses: list[_Poses | None], ratio: float | None, most: int | None
-    ) -> list[_Poses | None]:
+        poses: list[Poses | None], ratio: float | None, most: int | None
+    ) -> list[Poses | None]:
         """The poses of the models still running whose best RMS is within ``ratio`` of
         the best model's, at most the ``most`` best models (None for the others, now
         pruned)."""
@@ -376,7 +233,7 @@ def _search(
         ]
 
     first = batched(
-        [p for p, _, _ in screened], points[screen_idx], search.screen_iterations, threshold_m
+        [s.poses for s in screened], points[screen_idx], search.screen_iterations, threshold_m
     )
     coarse = batched(
         distinct(prune(first, config.screen_prune_ratio, search.coarse_models), search.n_coarse),
@@ -410,7 +267,7 @@ def _search(
     seconds_per_pose = (time.perf_counter() - start) / max(int(bounds[-1]) if live else 0, 1)
     out = []
     for w, model in enumerate(models):
-        candidates, matched = screened[w][1], screened[w][2]
+        candidates, matched = screened[w].candidates, screened[w].matched
         if w not in scored:
             # a model with candidates that the budgets left out is pruned, not rejected
             dropped = rejected(model.name, RegistrationMode.FAST, 0.0, candidates, seconds[w])
