@@ -1,7 +1,7 @@
 """Point-to-mesh distances: exact closest points and a narrow-band signed distance grid.
 
 :class:`MeshDistance` is exact everywhere: a uniform grid of cell lists and the
-point-triangle test (:mod:`~recognition.surfaces.closest_kernels`; built in milliseconds,
+point-triangle test (:mod:`~recognition.surfaces.mesh_kernels`; built in milliseconds,
 about 50 bytes per face, against 0.1 s and 200 bytes per face for libigl's AABB tree, and
 as fast to query near the surface). :class:`DistanceField` samples the signed distance on a
 voxel grid in a band around the surface (point-to-plane distance to the nearest vertex)
@@ -32,7 +32,8 @@ Mask = NDArray[np.bool_]
 
 
 class MeshDistance:
-    """Exact distances from points to a mesh: a grid of cell lists (built on first use).
+    """Exact distances from points to a mesh, and first hits of rays: a grid of cell lists
+    (built on first use).
 
     Parameters
     ----------
@@ -66,9 +67,9 @@ class MeshDistance:
 
     def _cells(self) -> tuple[Any, ...]:
         """The grid: bounding spheres, cell lists, origin, cell side and shape."""
-        from recognition.surfaces import closest_kernels  # numba: imported when first needed
+        from recognition.surfaces import mesh_kernels  # numba: imported when first needed
 
-        spheres, box, low, high, edge = closest_kernels.face_bounds(self.vertices, self.faces)
+        spheres, box, low, high, edge = mesh_kernels.face_bounds(self.vertices, self.faces)
         extent = np.maximum(high - low, 1e-300)
         cell = max(self.CELL_EDGES * edge, float(np.prod(extent) / self.MAX_CELLS) ** (1 / 3))
         while np.sum(np.prod(np.floor(box / cell) + 2, axis=1)) > self.MAX_ENTRIES_PER_FACE * len(
@@ -77,9 +78,7 @@ class MeshDistance:
             cell *= 1.5  # large triangles: fewer, larger cells
         shape = np.maximum(np.ceil(extent / cell).astype(np.int64), 1)
         origin = low - 0.5 * (shape * cell - extent)
-        start, faces_of = closest_kernels.build_cells(
-            self.vertices, self.faces, origin, cell, shape
-        )
+        start, faces_of = mesh_kernels.build_cells(self.vertices, self.faces, origin, cell, shape)
         return spheres, start, faces_of, origin, cell, shape
 
     def closest(self, points: ArrayLike) -> tuple[Array, Array, IntArray]:
@@ -99,14 +98,35 @@ class MeshDistance:
         face : (m,) int
             The face it lies on (-1 for points that are not finite).
         """
-        from recognition.surfaces import closest_kernels
+        from recognition.surfaces import mesh_kernels
 
         if self._grid is None:
             self._grid = self._cells()
         spheres, start, faces_of, origin, cell, shape = self._grid
         p = np.ascontiguousarray(np.asarray(points, float).reshape(-1, 3))
-        return closest_kernels.closest_points(
+        return mesh_kernels.closest_points(
             self.vertices, self.faces, spheres, start, faces_of, origin, cell, shape, p
+        )
+
+    def first_hits(self, origins: ArrayLike, directions: ArrayLike) -> tuple[IntArray, Array]:
+        """The face each ray meets first (-1: none) and the distance to it along the ray
+        (inf: none), for rays ``origins + t * directions``, t >= 0 (both (m, 3), metres;
+        unit directions give the distance in metres)."""
+        from recognition.surfaces import mesh_kernels
+
+        if self._grid is None:
+            self._grid = self._cells()
+        _, start, faces_of, origin, cell, shape = self._grid
+        return mesh_kernels.first_hits(
+            self.vertices,
+            self.faces,
+            start,
+            faces_of,
+            origin,
+            cell,
+            shape,
+            np.ascontiguousarray(np.asarray(origins, float).reshape(-1, 3)),
+            np.ascontiguousarray(np.asarray(directions, float).reshape(-1, 3)),
         )
 
     def signed(self, points: ArrayLike) -> Array:

@@ -1,9 +1,8 @@
 """The compiled probing scene with one object, and queries on the object's original mesh.
 
 The experimenter's plan, the tip's contact and the ground truth query the mesh (closest
-points by :class:`~recognition.surfaces.distance.MeshDistance`, first ray hits by libigl's
-AABB tree, face normals), built on first use; the
-sensor never does.
+points and first ray hits by :class:`~recognition.surfaces.distance.MeshDistance`, built
+on first use; face normals); the sensor never does.
 """
 
 from __future__ import annotations
@@ -58,7 +57,6 @@ class ProbeScene:
     build_seconds: float
     tip_contact: bool = True
     _mesh_distance: MeshDistance | None = field(default=None, repr=False)
-    _ray_tree: Any = field(default=None, repr=False)
     _face_normals: Any = field(default=None, repr=False)
 
     @property
@@ -79,26 +77,8 @@ class ProbeScene:
         self, origins_in_object: ArrayLike, directions_in_object: ArrayLike
     ) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
         """Returns the face hit first by each ray (-1: none) and the distance along it,
-        metres, for (k, 3) origins and unit directions in the model frame.
-
-        libigl's ray-triangle test has absolute tolerances that miss sub-millimetre
-        triangles in metres: the rays are cast on a copy in millimetres.
-        """
-        if self._ray_tree is None:
-            import igl
-
-            vertices, faces = self.mesh_distance.vertices, self.mesh_distance.faces
-            vertices_mm = vertices * 1e3
-            tree = igl.AABB()
-            tree.init(vertices_mm, faces)
-            self._ray_tree = (tree, vertices_mm, faces)
-        tree, vertices_mm, faces = self._ray_tree
-        origins = np.ascontiguousarray(origins_in_object, dtype=np.float64).reshape(-1, 3) * 1e3
-        directions = np.ascontiguousarray(directions_in_object, dtype=np.float64).reshape(-1, 3)
-        hit_faces, distance_mm, _ = tree.intersect_ray_first(
-            vertices_mm, faces, origins, directions
-        )
-        return np.asarray(hit_faces, dtype=np.int64), np.asarray(distance_mm) * 1e-3
+        metres, for (k, 3) origins and unit directions in the model frame."""
+        return self.mesh_distance.first_hits(origins_in_object, directions_in_object)
 
     def sphere_rests_in_world(
         self, starts_in_world: ArrayLike, radius_m: float, floor_z_m: float = 0.0
