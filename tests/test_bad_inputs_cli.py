@@ -71,6 +71,9 @@ CASES = [
     ("benchmark_curves", "--noise 0.01", "--noise, --window and --decide-by need --spacing"),
     ("benchmark_curves", "--spacing 0.05 --window 20", "--window must be odd, got 20"),
     ("benchmark_curves", "--spacing 0", "argument --spacing: expected a finite number"),
+    # benchmark_mesh_distance.py
+    ("benchmark_mesh_distance", "--queries 0", "argument --queries: expected an integer >= 1"),
+    ("benchmark_mesh_distance", "--out-dir {file}", "--out-dir {file}:"),
     # user_meshes.py
     ("user_meshes", "{file}", "is a file; expected a directory"),
     ("user_meshes", "{tmp} --units ft", "argument --units: invalid choice: 'ft'"),

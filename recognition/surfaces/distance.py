@@ -1,9 +1,9 @@
 """Point-to-mesh distances: exact closest points and a narrow-band signed distance grid.
 
 :class:`MeshDistance` is exact everywhere: a uniform grid of cell lists and the
-point-triangle test (:mod:`~recognition.surfaces.mesh_kernels`; built in milliseconds,
-about 50 bytes per face, against 0.1 s and 200 bytes per face for libigl's AABB tree, and
-as fast to query near the surface). :class:`DistanceField` samples the signed distance on a
+point-triangle test (:mod:`~recognition.surfaces.mesh_kernels`: built about ten times
+faster than libigl's AABB tree, in a fifth of its memory, answering somewhat fewer
+queries per second). :class:`DistanceField` samples the signed distance on a
 voxel grid in a band around the surface (point-to-plane distance to the nearest vertex)
 and interpolates it trilinearly with its gradient: cheap enough to score thousands of
 candidate poses, smooth enough for Gauss-Newton. ``trimesh.proximity`` is not used: its
