@@ -51,8 +51,17 @@ class MeshDistance:
     def __init__(self, vertices: ArrayLike, faces: ArrayLike) -> None:
         self.vertices = np.ascontiguousarray(vertices, dtype=np.float64)
         self.faces = np.ascontiguousarray(faces, dtype=np.int64)
+        if self.vertices.ndim != 2 or self.vertices.shape[1:] != (3,):
+            raise ValueError(f"a mesh needs (n, 3) vertices, got shape {self.vertices.shape}")
+        if not np.isfinite(self.vertices).all():
+            raise ValueError("a mesh's vertices must be finite numbers")
         if self.faces.ndim != 2 or self.faces.shape[1:] != (3,) or len(self.faces) == 0:
             raise ValueError(f"a mesh needs (f >= 1, 3) faces, got shape {self.faces.shape}")
+        if self.faces.min() < 0 or self.faces.max() >= len(self.vertices):
+            raise ValueError(
+                f"a mesh's faces must index its {len(self.vertices)} vertices, got indices "
+                f"{self.faces.min()}..{self.faces.max()}"
+            )
         self._grid: tuple[Any, ...] | None = None
         self._face_normals: Array | None = None
 
@@ -70,12 +79,14 @@ class MeshDistance:
         from recognition.surfaces import mesh_kernels  # numba: imported when first needed
 
         spheres, box, low, high, edge = mesh_kernels.face_bounds(self.vertices, self.faces)
+        if not edge > 0:
+            raise ValueError("every face of the mesh has zero size: it has no surface")
         extent = np.maximum(high - low, 1e-300)
-        cell = max(self.CELL_EDGES * edge, float(np.prod(extent) / self.MAX_CELLS) ** (1 / 3))
-        while np.sum(np.prod(np.floor(box / cell) + 2, axis=1)) > self.MAX_ENTRIES_PER_FACE * len(
-            box
-        ):
-            cell *= 1.5  # large triangles: fewer, larger cells
+        cell = self.CELL_EDGES * edge
+        while np.prod(np.ceil(extent / cell)) > self.MAX_CELLS or np.sum(
+            np.prod(np.floor(box / cell) + 2, axis=1)
+        ) > self.MAX_ENTRIES_PER_FACE * len(box):
+            cell *= 1.5  # a large object or large triangles: fewer, larger cells
         shape = np.maximum(np.ceil(extent / cell).astype(np.int64), 1)
         origin = low - 0.5 * (shape * cell - extent)
         start, faces_of = mesh_kernels.build_cells(self.vertices, self.faces, origin, cell, shape)

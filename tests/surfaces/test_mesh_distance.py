@@ -95,9 +95,28 @@ def test_points_that_are_not_finite_get_no_answer():
     assert np.isfinite(d[2]) and f[2] >= 0
 
 
-def test_a_mesh_without_faces_is_refused():
-    with pytest.raises(ValueError, match="faces"):
-        MeshDistance(np.zeros((3, 3)), np.zeros((0, 3), int))
+@pytest.mark.parametrize(
+    ("vertices", "faces", "message"),
+    [
+        (np.eye(3), np.zeros((0, 3), int), "faces"),
+        (np.eye(3), [[0, 1, 3]], "index its 3 vertices"),
+        (np.eye(3), [[0, -1, 2]], "index its 3 vertices"),
+        ([[0, 0, 0], [1, 0, np.nan], [0, 1, 0]], [[0, 1, 2]], "finite"),
+        (np.zeros((3, 2)), [[0, 1, 2]], "vertices"),
+        (np.zeros((3, 3)), [[0, 1, 2]], "zero size"),
+    ],
+)
+def test_a_mesh_that_is_not_one_is_refused(vertices, faces, message):
+    with pytest.raises(ValueError, match=message):
+        MeshDistance(vertices, faces).closest([[0.0, 0.0, 0.0]])
+
+
+def test_a_large_flat_mesh_of_small_triangles_keeps_its_grid_bounded():
+    plane = trimesh.creation.box(extents=(1.0, 1.0, 1e-6)).subdivide_to_size(0.002)
+    distance = MeshDistance(plane.vertices, plane.faces)
+    d, _, _ = distance.closest([[0.1, 0.2, 0.05], [0.3, -0.4, -0.01]])
+    np.testing.assert_allclose(d, [0.05 - 5e-7, 0.01 - 5e-7], rtol=1e-9)
+    assert np.prod(distance._grid[5]) <= MeshDistance.MAX_CELLS
 
 
 def first_hit_by_every_triangle(
