@@ -14,8 +14,9 @@ from recognition.surfaces.distance import MeshDistance
 __all__ = ["refine_poses"]
 
 Array = NDArray[np.float64]
-PoseState = tuple[Array, Array, Array, Array, Array, NDArray[np.int64]]
-"""R, t, the moved points, their distances, closest points and faces: one pose."""
+PoseState = tuple[Array, Array, Array, Array, Array, Array]
+"""R, t, the moved points, their distances, closest points and the unit normals of the
+faces they lie on."""
 
 
 def refine_poses(
@@ -46,12 +47,13 @@ def refine_poses(
         X = np.einsum("nj,kij->kni", points, R) + t[:, None, :]
         distance, q, face = distance_to.closest(X.reshape(-1, 3))
         k = len(R)
-        return R, t, X, distance.reshape(k, n), q.reshape(k, n, 3), face.reshape(k, n)
+        normals = distance_to.normals_of(face).reshape(k, n, 3)
+        return R, t, X, distance.reshape(k, n), q.reshape(k, n, 3), normals
 
     def signed(state: State) -> Array:
         """Point-to-plane residuals (k, n), at most the threshold in size."""
-        X, q, face = state[2], state[4], state[5]
-        r = np.einsum("kij,kij->ki", X - q, distance_to.face_normals[face])
+        X, q, normals = state[2], state[4], state[5]
+        r = np.einsum("kij,kij->ki", X - q, normals)
         return np.clip(r, -threshold_m, threshold_m)
 
     def cost(state: State) -> Array:
@@ -62,8 +64,7 @@ def refine_poses(
         return np.asarray(np.mean(np.minimum(state[3], threshold_m) ** 2, axis=1))
 
     def linearize(state: State) -> tuple[Array, Array]:
-        X, distance, q, face = state[2], state[3], state[4], state[5]
-        normals = distance_to.face_normals[face]
+        X, distance, q, normals = state[2], state[3], state[4], state[5]
         r = np.einsum("kij,kij->ki", X - q, normals)
         c = X.mean(axis=1, keepdims=True)
         J = np.concatenate([cross(X - c, normals), normals], axis=2)

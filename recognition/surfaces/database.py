@@ -85,8 +85,8 @@ class ModelDatabase:
     def prepare(self) -> ModelDatabase:
         """Build the structures every fast-mode recognition searches now (the candidate
         maps, the models' symmetries, the field stack); returns the database. The
-        exact-distance trees of a model are built when a recognition first polishes a pose
-        on it (about 0.1 s for a 100k-vertex model), the KD-trees when a mode needs them."""
+        exact-distance grid of a model is built when a recognition first polishes a pose
+        on it (10-40 ms for a 100k-vertex model), the KD-trees when a mode needs them."""
         for model in self.models.values():
             model.candidate_curvatures  # noqa: B018
             model.symmetries  # noqa: B018

@@ -31,6 +31,12 @@ IntArray = NDArray[np.int64]
 Mask = NDArray[np.bool_]
 
 
+def _unit_normals(triangles: Array) -> Array:
+    """Unit normals (f, 3) of triangles (f, 3, 3), by their corners' order."""
+    fn = cross(triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0])
+    return fn / np.maximum(np.linalg.norm(fn, axis=1, keepdims=True), 1e-300)
+
+
 class MeshDistance:
     """Exact distances from points to a mesh, and first hits of rays: a grid of cell lists
     (built on first use).
@@ -67,12 +73,17 @@ class MeshDistance:
 
     @property
     def face_normals(self) -> Array:
-        """Unit face normals (f, 3) (computed on first use)."""
+        """Unit face normals (f, 3) (computed on first use and kept)."""
         if self._face_normals is None:
-            tri = self.vertices[self.faces]
-            fn = cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
-            self._face_normals = fn / np.maximum(np.linalg.norm(fn, axis=1, keepdims=True), 1e-300)
+            self._face_normals = _unit_normals(self.vertices[self.faces])
         return self._face_normals
+
+    def normals_of(self, faces: ArrayLike) -> Array:
+        """Unit normals (..., 3) of the faces ``faces`` (...,), the same numbers as
+        :attr:`face_normals`, computed on each call (a search polishes on many models and
+        reads few faces of each: nothing is kept)."""
+        f = np.asarray(faces, dtype=np.int64)
+        return _unit_normals(self.vertices[self.faces[f.ravel()]]).reshape(*f.shape, 3)
 
     def _cells(self) -> tuple[Any, ...]:
         """The grid: bounding spheres, cell lists, origin, cell side and shape."""
@@ -160,7 +171,7 @@ class MeshDistance:
         :meth:`signed` with what it found on the way."""
         d, q, f = self.closest(points)
         side = np.einsum(
-            "ij,ij->i", np.asarray(points, float).reshape(-1, 3) - q, self.face_normals[f]
+            "ij,ij->i", np.asarray(points, float).reshape(-1, 3) - q, self.normals_of(f)
         )
         return np.where(side < 0, -d, d), q, f
 

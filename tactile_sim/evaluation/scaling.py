@@ -61,7 +61,7 @@ parts["candidate index"] = sum(a.nbytes for a in arrays)
 timings = [sum(m.timings.values()) for m in db.models.values()]
 loaded_mb = rss_mb()
 in_use_mb = None
-if int(sys.argv[2]):  # then recognise curves on every model: the exact trees it builds
+if int(sys.argv[2]):  # then recognise curves on every model: the exact grids it builds
     import numpy as np
     from recognition import RecognitionError
     from recognition.synthetic import mesh_data_curves
@@ -86,7 +86,7 @@ print(json.dumps({
 def database_footprint(directory: Path, repeats: int = 2) -> dict[str, Any]:
     """Load time (s, warm: the best of ``repeats`` loads, each in a fresh interpreter),
     resident memory after the load and before it (MB), resident memory after one
-    recognition on each model (MB: the exact-distance trees that polishing builds), the
+    recognition on each model (MB: the exact-distance grids that polishing builds), the
     arrays by kind (MB) and the mean table build time per model (s, from the manifest)
     of the database in ``directory``."""
     runs = []

@@ -166,3 +166,11 @@ def test_first_ray_hits_are_the_nearest_of_all_triangles():
     ref_t = np.asarray(ref_t)[:400][found] * 1e-3
     assert np.isclose(t[:400][found], ref_t, rtol=1e-6).sum() >= 380
     assert np.all(t[:400][found] <= ref_t * (1 + 1e-6))
+
+
+def test_normals_of_some_faces_are_those_of_all_faces():
+    mesh = blob(subdivisions=3)
+    distance = MeshDistance(mesh.vertices, mesh.faces)
+    faces = np.random.default_rng(4).integers(len(mesh.faces), size=(7, 5))
+    np.testing.assert_array_equal(distance.normals_of(faces), distance.face_normals[faces])
+    np.testing.assert_allclose(distance.face_normals, mesh.face_normals, atol=1e-12)
