@@ -14,7 +14,6 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -35,6 +34,25 @@ def _unit_normals(triangles: Array) -> Array:
     """Unit normals (f, 3) of triangles (f, 3, 3), by their corners' order."""
     fn = cross(triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0])
     return fn / np.maximum(np.linalg.norm(fn, axis=1, keepdims=True), 1e-300)
+
+
+@dataclass(frozen=True)
+class _CellGrid:
+    """A mesh's grid of cell lists (:mod:`~recognition.surfaces.mesh_kernels`): each face's
+    bounding sphere (f, 4), the faces of cell c ``faces_of[start[c]:start[c + 1]]``, the
+    lower corner of cell (0, 0, 0), the cell side (metres) and the cells per axis."""
+
+    spheres: Array
+    start: NDArray[np.int32]
+    faces_of: NDArray[np.int32]
+    origin: Array
+    cell: float
+    shape: IntArray
+
+    @property
+    def nbytes(self) -> int:
+        """Bytes of its arrays."""
+        return self.spheres.nbytes + self.start.nbytes + self.faces_of.nbytes
 
 
 class MeshDistance:
@@ -68,7 +86,7 @@ class MeshDistance:
                 f"a mesh's faces must index its {len(self.vertices)} vertices, got indices "
                 f"{self.faces.min()}..{self.faces.max()}"
             )
-        self._grid: tuple[Any, ...] | None = None
+        self._grid: _CellGrid | None = None
         self._face_normals: Array | None = None
 
     @property
@@ -85,8 +103,15 @@ class MeshDistance:
         f = np.asarray(faces, dtype=np.int64)
         return _unit_normals(self.vertices[self.faces[f.ravel()]]).reshape(*f.shape, 3)
 
-    def _cells(self) -> tuple[Any, ...]:
-        """The grid: bounding spheres, cell lists, origin, cell side and shape."""
+    @property
+    def grid(self) -> _CellGrid:
+        """The grid of cell lists the queries search (built on first use)."""
+        if self._grid is None:
+            self._grid = self._cells()
+        return self._grid
+
+    def _cells(self) -> _CellGrid:
+        """Builds the grid: the cell side from the faces' sizes, within the limits."""
         from recognition.surfaces import mesh_kernels  # numba: imported when first needed
 
         spheres, box, low, high, edge = mesh_kernels.face_bounds(self.vertices, self.faces)
@@ -101,7 +126,7 @@ class MeshDistance:
         shape = np.maximum(np.ceil(extent / cell).astype(np.int64), 1)
         origin = low - 0.5 * (shape * cell - extent)
         start, faces_of = mesh_kernels.build_cells(self.vertices, self.faces, origin, cell, shape)
-        return spheres, start, faces_of, origin, cell, shape
+        return _CellGrid(spheres, start, faces_of, origin, float(cell), shape)
 
     def closest(self, points: ArrayLike) -> tuple[Array, Array, IntArray]:
         """Closest points on the mesh.
@@ -122,12 +147,10 @@ class MeshDistance:
         """
         from recognition.surfaces import mesh_kernels
 
-        if self._grid is None:
-            self._grid = self._cells()
-        spheres, start, faces_of, origin, cell, shape = self._grid
+        g = self.grid
         p = np.ascontiguousarray(np.asarray(points, float).reshape(-1, 3))
         return mesh_kernels.closest_points(
-            self.vertices, self.faces, spheres, start, faces_of, origin, cell, shape, p
+            self.vertices, self.faces, g.spheres, g.start, g.faces_of, g.origin, g.cell, g.shape, p
         )
 
     def first_hits(self, origins: ArrayLike, directions: ArrayLike) -> tuple[IntArray, Array]:
@@ -136,17 +159,15 @@ class MeshDistance:
         unit directions give the distance in metres)."""
         from recognition.surfaces import mesh_kernels
 
-        if self._grid is None:
-            self._grid = self._cells()
-        _, start, faces_of, origin, cell, shape = self._grid
+        g = self.grid
         return mesh_kernels.first_hits(
             self.vertices,
             self.faces,
-            start,
-            faces_of,
-            origin,
-            cell,
-            shape,
+            g.start,
+            g.faces_of,
+            g.origin,
+            g.cell,
+            g.shape,
             np.ascontiguousarray(np.asarray(origins, float).reshape(-1, 3)),
             np.ascontiguousarray(np.asarray(directions, float).reshape(-1, 3)),
         )

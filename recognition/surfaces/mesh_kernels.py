@@ -98,8 +98,8 @@ def build_cells(
         for a in range(3):
             low = min(vertices[faces[f, 0], a], vertices[faces[f, 1], a], vertices[faces[f, 2], a])
             high = max(vertices[faces[f, 0], a], vertices[faces[f, 1], a], vertices[faces[f, 2], a])
-            lo[f, a] = min(max(int(np.floor((low - origin[a]) / cell)), 0), shape[a] - 1)
-            hi[f, a] = min(max(int(np.floor((high - origin[a]) / cell)), 0), shape[a] - 1)
+            lo[f, a] = _index(low, origin[a], cell, shape[a])
+            hi[f, a] = _index(high, origin[a], cell, shape[a])
         for i in range(lo[f, 0], hi[f, 0] + 1):
             for j in range(lo[f, 1], hi[f, 1] + 1):
                 for k in range(lo[f, 2], hi[f, 2] + 1):

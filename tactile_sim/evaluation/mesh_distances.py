@@ -92,7 +92,7 @@ def _compare_one(name: str, queries: int, rng: np.random.Generator) -> dict[str,
     start = time.perf_counter()
     grid.closest(vertices[:1])
     grid_build = time.perf_counter() - start
-    grid_bytes = sum(a.nbytes for a in grid._grid[:3])  # spheres and cell lists
+    grid_bytes = grid.grid.nbytes
     start = time.perf_counter()
     tree = igl.AABB()
     tree.init(vertices, faces)

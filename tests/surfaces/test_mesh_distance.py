@@ -116,7 +116,7 @@ def test_a_large_flat_mesh_of_small_triangles_keeps_its_grid_bounded():
     distance = MeshDistance(plane.vertices, plane.faces)
     d, _, _ = distance.closest([[0.1, 0.2, 0.05], [0.3, -0.4, -0.01]])
     np.testing.assert_allclose(d, [0.05 - 5e-7, 0.01 - 5e-7], rtol=1e-9)
-    assert np.prod(distance._grid[5]) <= MeshDistance.MAX_CELLS
+    assert np.prod(distance.grid.shape) <= MeshDistance.MAX_CELLS
 
 
 def first_hit_by_every_triangle(
