@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 
 from recognition.surfaces.distance import MeshDistance
+from tactile_sim.evaluation.scaling import RSS_MB_SOURCE
 from tactile_sim.probing import resolve_object
 
 __all__ = ["OFFSETS_MM", "compare_with_libigl", "comparison_table", "mesh_distance"]
@@ -31,19 +32,16 @@ def mesh_distance(name: str) -> MeshDistance:
 
 #: Run in a fresh interpreter: the growth of resident memory (Linux) while libigl builds
 #: the AABB tree of one object's mesh (an allocator's freed pages would hide it here).
-_TREE_BYTES = """
-import os, sys, igl, numpy as np
+_TREE_BYTES = RSS_MB_SOURCE + """
+import sys, igl, numpy as np
 from tactile_sim.probing import resolve_object
 mesh = resolve_object(sys.argv[1], progress=False).mesh
 v = np.ascontiguousarray(mesh.vertices, dtype=np.float64)
 f = np.ascontiguousarray(mesh.faces, dtype=np.int64)
-def rss():
-    with open("/proc/self/statm") as file:
-        return int(file.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
-before = rss()
+before = rss_mb()
 tree = igl.AABB()
 tree.init(v, f)
-print(rss() - before)
+print(round((rss_mb() - before) * 2**20))
 """
 
 

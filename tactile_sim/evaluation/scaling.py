@@ -34,14 +34,19 @@ def sized_specs(
     return specs
 
 
-# Run in a fresh interpreter: what a worker pays to load the database, and what it holds.
-_FOOTPRINT = """
-import json, resource, sys, time
-from recognition import ModelDatabase
+#: Source of ``rss_mb()``, the resident memory (MB, Linux) of the interpreter that runs it:
+#: for the measurements made in a fresh interpreter.
+RSS_MB_SOURCE = """
 def rss_mb():
     for line in open("/proc/self/status"):
         if line.startswith("VmRSS:"):
             return int(line.split()[1]) / 1024
+"""
+
+# Run in a fresh interpreter: what a worker pays to load the database, and what it holds.
+_FOOTPRINT = RSS_MB_SOURCE + """
+import json, resource, sys, time
+from recognition import ModelDatabase
 before = rss_mb()
 start = time.perf_counter()
 db = ModelDatabase.load(sys.argv[1])
