@@ -32,7 +32,9 @@ def mesh_distance(name: str) -> MeshDistance:
 
 #: Run in a fresh interpreter: the growth of resident memory (Linux) while libigl builds
 #: the AABB tree of one object's mesh (an allocator's freed pages would hide it here).
-_TREE_BYTES = RSS_MB_SOURCE + """
+_TREE_BYTES = (
+    RSS_MB_SOURCE
+    + """
 import sys, igl, numpy as np
 from tactile_sim.probing import resolve_object
 mesh = resolve_object(sys.argv[1], progress=False).mesh
@@ -43,6 +45,7 @@ tree = igl.AABB()
 tree.init(v, f)
 print(round((rss_mb() - before) * 2**20))
 """
+)
 
 
 def _tree_bytes(name: str) -> int:

@@ -44,7 +44,9 @@ def rss_mb():
 """
 
 # Run in a fresh interpreter: what a worker pays to load the database, and what it holds.
-_FOOTPRINT = RSS_MB_SOURCE + """
+_FOOTPRINT = (
+    RSS_MB_SOURCE
+    + """
 import json, resource, sys, time
 from recognition import ModelDatabase
 before = rss_mb()
@@ -86,6 +88,7 @@ print(json.dumps({
     "build_s_per_model": sum(timings) / len(timings),
 }))
 """
+)
 
 
 def database_footprint(directory: Path, repeats: int = 2) -> dict[str, Any]:
