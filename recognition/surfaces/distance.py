@@ -153,6 +153,27 @@ class MeshDistance:
             self.vertices, self.faces, g.spheres, g.start, g.faces_of, g.origin, g.cell, g.shape, p
         )
 
+    def closest_to(self, x: float, y: float, z: float) -> tuple[float, float, float, float, int]:
+        """The closest point on the mesh to one finite point (x, y, z), metres: its
+        distance, coordinates and face; the same numbers as :meth:`closest`, for a
+        caller that asks once per step (a probe's tip), without the arrays."""
+        from recognition.surfaces import mesh_kernels
+
+        g = self.grid
+        return mesh_kernels.closest_point(
+            self.vertices,
+            self.faces,
+            g.spheres,
+            g.start,
+            g.faces_of,
+            g.origin,
+            g.cell,
+            g.shape,
+            float(x),
+            float(y),
+            float(z),
+        )
+
     def first_hits(self, origins: ArrayLike, directions: ArrayLike) -> tuple[IntArray, Array]:
         """The face each ray meets first (-1: none) and the distance to it along the ray
         (inf: none), for rays ``origins + t * directions``, t >= 0 (both (m, 3), metres;

@@ -23,7 +23,7 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["build_cells", "closest_points", "face_bounds", "first_hits"]
+__all__ = ["build_cells", "closest_point", "closest_points", "face_bounds", "first_hits"]
 
 #: How far outside a triangle, in barycentric coordinates, a ray still hits it.
 RAY_SLACK = 1e-10
@@ -218,6 +218,75 @@ def _index(x: float, origin: float, cell: float, n: int) -> int:  # pragma: no c
 
 
 @numba.njit(cache=True, nogil=True)
+def closest_point(
+    vertices: Array,
+    faces: IntArray,
+    spheres: Array,
+    start: Int32Array,
+    faces_of: Int32Array,
+    origin: Array,
+    cell: float,
+    shape: IntArray,
+    px: float,
+    py: float,
+    pz: float,
+) -> tuple[float, float, float, float, int]:  # pragma: no cover - compiled
+    """Exact closest point on the mesh to one finite point (px, py, pz): the distance,
+    the closest point and its face (arguments as :func:`closest_points`)."""
+    p = (px, py, pz)
+    n0, n1, n2 = shape[0], shape[1], shape[2]
+    c0 = _index(p[0], origin[0], cell, n0)
+    c1 = _index(p[1], origin[1], cell, n1)
+    c2 = _index(p[2], origin[2], cell, n2)
+    best = (np.inf, 0.0, 0.0, 0.0, -1)
+    k = -1
+    while best[4] < 0:  # shells of cells about the point's own until a face is met
+        k += 1
+        for i in range(max(c0 - k, 0), min(c0 + k, n0 - 1) + 1):
+            for j in range(max(c1 - k, 0), min(c1 + k, n1 - 1) + 1):
+                on_shell = abs(i - c0) == k or abs(j - c1) == k
+                for l in range(max(c2 - k, 0), min(c2 + k, n2 - 1) + 1):
+                    if on_shell or abs(l - c2) == k:
+                        best = _visit(
+                            vertices,
+                            faces,
+                            spheres,
+                            start,
+                            faces_of,
+                            (i * n1 + j) * n2 + l,
+                            p,
+                            best,
+                        )
+    r = np.sqrt(best[0])  # then every other cell the ball of the best distance reaches
+    for i in range(
+        _index(p[0] - r, origin[0], cell, n0), _index(p[0] + r, origin[0], cell, n0) + 1
+    ):
+        ex = max(origin[0] + i * cell - p[0], p[0] - origin[0] - (i + 1) * cell, 0.0)
+        for j in range(
+            _index(p[1] - r, origin[1], cell, n1), _index(p[1] + r, origin[1], cell, n1) + 1
+        ):
+            ey = max(origin[1] + j * cell - p[1], p[1] - origin[1] - (j + 1) * cell, 0.0)
+            for l in range(
+                _index(p[2] - r, origin[2], cell, n2), _index(p[2] + r, origin[2], cell, n2) + 1
+            ):
+                if abs(i - c0) <= k and abs(j - c1) <= k and abs(l - c2) <= k:
+                    continue
+                ez = max(origin[2] + l * cell - p[2], p[2] - origin[2] - (l + 1) * cell, 0.0)
+                if ex * ex + ey * ey + ez * ez < best[0]:
+                    best = _visit(
+                        vertices,
+                        faces,
+                        spheres,
+                        start,
+                        faces_of,
+                        (i * n1 + j) * n2 + l,
+                        p,
+                        best,
+                    )
+    return np.sqrt(best[0]), best[1], best[2], best[3], best[4]
+
+
+@numba.njit(cache=True, nogil=True)
 def closest_points(
     vertices: Array,
     faces: IntArray,
@@ -250,68 +319,19 @@ def closest_points(
         Points that are not finite get a distance and closest point of NaN, face -1.
     """
     m = points.shape[0]
-    n0, n1, n2 = shape[0], shape[1], shape[2]
     distance = np.empty(m)
     closest = np.empty((m, 3))
     face = np.empty(m, np.int64)
     for n in range(m):
-        p = (points[n, 0], points[n, 1], points[n, 2])
-        if not (np.isfinite(p[0]) and np.isfinite(p[1]) and np.isfinite(p[2])):
+        px, py, pz = points[n, 0], points[n, 1], points[n, 2]
+        if not (np.isfinite(px) and np.isfinite(py) and np.isfinite(pz)):
             distance[n] = np.nan
             closest[n, 0] = closest[n, 1] = closest[n, 2] = np.nan
             face[n] = -1
             continue
-        c0 = _index(p[0], origin[0], cell, n0)
-        c1 = _index(p[1], origin[1], cell, n1)
-        c2 = _index(p[2], origin[2], cell, n2)
-        best = (np.inf, 0.0, 0.0, 0.0, -1)
-        k = -1
-        while best[4] < 0:  # shells of cells about the point's own until a face is met
-            k += 1
-            for i in range(max(c0 - k, 0), min(c0 + k, n0 - 1) + 1):
-                for j in range(max(c1 - k, 0), min(c1 + k, n1 - 1) + 1):
-                    on_shell = abs(i - c0) == k or abs(j - c1) == k
-                    for l in range(max(c2 - k, 0), min(c2 + k, n2 - 1) + 1):
-                        if on_shell or abs(l - c2) == k:
-                            best = _visit(
-                                vertices,
-                                faces,
-                                spheres,
-                                start,
-                                faces_of,
-                                (i * n1 + j) * n2 + l,
-                                p,
-                                best,
-                            )
-        r = np.sqrt(best[0])  # then every other cell the ball of the best distance reaches
-        for i in range(
-            _index(p[0] - r, origin[0], cell, n0), _index(p[0] + r, origin[0], cell, n0) + 1
-        ):
-            ex = max(origin[0] + i * cell - p[0], p[0] - origin[0] - (i + 1) * cell, 0.0)
-            for j in range(
-                _index(p[1] - r, origin[1], cell, n1), _index(p[1] + r, origin[1], cell, n1) + 1
-            ):
-                ey = max(origin[1] + j * cell - p[1], p[1] - origin[1] - (j + 1) * cell, 0.0)
-                for l in range(
-                    _index(p[2] - r, origin[2], cell, n2), _index(p[2] + r, origin[2], cell, n2) + 1
-                ):
-                    if abs(i - c0) <= k and abs(j - c1) <= k and abs(l - c2) <= k:
-                        continue
-                    ez = max(origin[2] + l * cell - p[2], p[2] - origin[2] - (l + 1) * cell, 0.0)
-                    if ex * ex + ey * ey + ez * ez < best[0]:
-                        best = _visit(
-                            vertices,
-                            faces,
-                            spheres,
-                            start,
-                            faces_of,
-                            (i * n1 + j) * n2 + l,
-                            p,
-                            best,
-                        )
-        distance[n] = np.sqrt(best[0])
-        closest[n, 0], closest[n, 1], closest[n, 2] = best[1], best[2], best[3]
-        face[n] = best[4]
+        distance[n], closest[n, 0], closest[n, 1], closest[n, 2], face[n] = closest_point(
+            vertices, faces, spheres, start, faces_of, origin, cell, shape, px, py, pz
+        )
     return distance, closest, face
 
 

@@ -28,13 +28,10 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
-from recognition.rigid import cross
 from tactile_sim import scene
 from tactile_sim.probing.probe_scene import ProbeScene
 
 __all__ = ["TipContact", "TipContactConfig"]
-
-_X_AXIS, _Y_AXIS = np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0])
 
 Step = Callable[..., None]
 """Steps a simulation: ``step(model, data)`` or ``step(model, data, nstep)``."""
@@ -107,21 +104,30 @@ class TipContact:
 
     def _query(self, data: mujoco.MjData, c: NDArray[np.float64]) -> None:
         self.queries += 1
-        c_object = (c - self._t) @ self._R
-        distances, nearest, face = self._mesh.closest(c_object[None])
-        q, distance = nearest[0], float(distances[0])
-        face_normal = self._mesh.face_normals[int(face[0])]
+        R = self._R
+        c_object = (c - self._t) @ R
+        distance, qx, qy, qz, face = self._mesh.closest_to(*c_object)
+        q = np.array((qx, qy, qz))
+        face_normal = self._mesh.face_normals[face]
         n = (c_object - q) / distance if distance > 1e-12 else face_normal
         if n @ face_normal < 0:  # the centre is under the surface: push it out
             n = face_normal
-        n_world = self._R @ n
-        helper = _X_AXIS if abs(n_world[0]) < 0.9 else _Y_AXIS
-        x = cross(helper, n_world)
-        x /= math.sqrt(float(x @ x))
-        frame = np.column_stack([x, cross(n_world, x), n_world])
+        n_world = R @ n
+        nx, ny, nz = n_world
+        # the box's x axis: the world's x (or y, when the normal is near x) across the normal
+        ax, ay, az = (0.0, -nz, ny) if abs(nx) < 0.9 else (nz, 0.0, -nx)
+        length = math.sqrt(ax * ax + ay * ay + az * az)
+        ax, ay, az = ax / length, ay / length, az / length
+        frame = np.array(  # columns x, n x x, n
+            (
+                (ax, ny * az - nz * ay, nx),
+                (ay, nz * ax - nx * az, ny),
+                (az, nx * ay - ny * ax, nz),
+            )
+        )
         quat = np.empty(4)
         mujoco.mju_mat2Quat(quat, frame.reshape(9))
-        data.mocap_pos[self._mocap] = self._R @ q + self._t - self._half_thickness * n_world
+        data.mocap_pos[self._mocap] = R @ q + self._t - self._half_thickness * n_world
         data.mocap_quat[self._mocap] = quat
         self._centre = c.copy()
         self._normal = n_world

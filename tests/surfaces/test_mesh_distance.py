@@ -67,6 +67,17 @@ def test_closest_points_are_exact_at_every_distance(make):
     assert_exact(mesh, queries(mesh, np.random.default_rng(0)))
 
 
+def test_one_point_at_a_time_gives_the_same_numbers_as_a_batch():
+    mesh = torus()
+    points = queries(mesh, np.random.default_rng(2))
+    distance = MeshDistance(mesh.vertices, mesh.faces)
+    d, q, f = distance.closest(points)
+    one = np.array([distance.closest_to(*p) for p in points])
+    assert np.array_equal(one[:, 0], d)
+    assert np.array_equal(one[:, 1:4], q)
+    assert np.array_equal(one[:, 4].astype(np.int64), f)
+
+
 def test_closest_points_are_exact_among_triangles_of_very_different_sizes():
     # a box of two-triangle faces with one face finely subdivided: the cells must grow
     box = trimesh.creation.box(extents=(0.3, 0.02, 0.01))
