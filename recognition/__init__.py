@@ -22,10 +22,11 @@ from recognition.errors import (
     RecognitionError,
 )
 from recognition.surfaces.active_touch import TouchStep, Verification, verify
-from recognition.surfaces.belief import Belief, BeliefConfig, Hypothesis, NoiseModel
+from recognition.surfaces.belief import Belief, BeliefConfig, Hypothesis
 from recognition.surfaces.data_curves import DataCurves
 from recognition.surfaces.database import DATABASE_FORMAT, ModelDatabase
 from recognition.surfaces.mesh_model import MeshModelConfig
+from recognition.surfaces.noise_model import NoiseModel
 from recognition.surfaces.registration import (
     ClosedFormConfig,
     FastConfig,

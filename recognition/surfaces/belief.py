@@ -20,10 +20,20 @@ kernel (infinitely smooth) calls micrometre roughness of the residuals impossibl
 made the true model of a mismatched object look hundreds of log-units worse than it
 is. Each residual is clipped at ``outlier_sigmas`` effective noise levels (a gross outlier
 counts alike under every hypothesis, and is reported). With a uniform prior over the
-hypotheses, the posterior of h is proportional to exp(-r_h^T Sigma^-1 r_h / 2) (its whitened
-residuals counted by Huber's loss beyond ``huber_k``, :class:`NoiseModel`),
-normalised over all hypotheses of all models and the alternative that none of them is
-right (:attr:`BeliefConfig.unexplained_p`: a search can miss the truth).
+hypotheses, the posterior of h is proportional to exp(-r_h^T Sigma^-1 r_h / 2) over the
+curves' points (its whitened residuals counted by Huber's loss beyond ``huber_k``,
+:class:`NoiseModel`), normalised over all hypotheses of all models and the alternative
+that none of them is right (:attr:`BeliefConfig.unexplained_p`: a search can miss the
+truth).
+
+A touch counts by how well h predicted it: its residual given all the other contact
+(leave-one-out: a pose refitted to the touch would otherwise explain any touch at all),
+whitened residual z_i over sqrt(1 - h_ii) with h_ii the touch's leverage on the pose fit,
+density N(0, L_ii^2 / (1 - h_ii)) with L_ii its conditional noise, against the uniform
+spread along the approach that "none of these" predicts
+(:attr:`BeliefConfig.touch_window_m`). A hypothesis that predicted the touch within its
+pose's uncertainty gains on "none"; one that had to move to meet it loses, and when no
+hypothesis predicted the touches, "none of these" grows.
 
 Each hypothesis also carries the uncertainty of its pose (Laplace: the inverse of
 J^T Sigma^-1 J, J the point-to-plane Jacobian of the residuals, with a weak prior) and so
@@ -47,10 +57,11 @@ from recognition.rigid import cross, pose_matrix, rotation_from_vector
 from recognition.surfaces.closest_fit import refine_poses
 from recognition.surfaces.data_curves import DataCurves
 from recognition.surfaces.mesh_model import MeshModel
+from recognition.surfaces.noise_model import NoiseModel, huber
 from recognition.surfaces.registration.ambiguity import distinct_poses
 from recognition.surfaces.registration.exact import smooth_normals
 
-__all__ = ["Belief", "BeliefConfig", "Hypothesis", "NoiseModel", "curve_points"]
+__all__ = ["Belief", "BeliefConfig", "Hypothesis", "curve_points"]
 
 Array = NDArray[np.float64]
 
@@ -69,95 +80,11 @@ def curve_points(curves: DataCurves, per_curve: int) -> Array:
     return np.concatenate(chosen)
 
 
-def huber(z: Array, k: float) -> Array:
-    """Huber's loss of each z: z^2 / 2 for |z| <= k, k |z| - k^2 / 2 beyond."""
-    a = np.abs(z)
-    return np.where(a <= k, 0.5 * a * a, k * a - 0.5 * k * k)
-
-
 def within_probability(offset: Array, covariance: Array, radius_m: float) -> float:
     """P(|offset + e| <= radius) for e ~ N(0, covariance) (3, 3), by fixed samples."""
     w, V = np.linalg.eigh(0.5 * (covariance + covariance.T))
     e = (_NORMAL_SAMPLES * np.sqrt(np.maximum(w, 0.0))) @ V.T
     return float(np.mean(np.linalg.norm(offset + e, axis=1) <= radius_m))
-
-
-@dataclass(frozen=True)
-class NoiseModel:
-    """How far contact data lie from the true model at the true pose.
-
-    Attributes
-    ----------
-    sensor_noise_m : float or None
-        Standard deviation of a contact point across the surface, metres; None: the
-        curves' own scatter (:func:`~recognition.surfaces.registration.data.data_noise_m`),
-        at least ``sensor_floor_m``.
-    sensor_floor_m : float
-        Least sensor noise assumed, metres (a fit never resolves below it: the models'
-        own discretisation).
-    model_mismatch_m : float
-        RMS of the object's difference from its model along the normals, metres.
-    correlation_m : float
-        Correlation length of that difference, metres (Matern 3/2).
-    outlier_sigmas : float
-        A residual beyond this many effective noise levels sqrt(s^2 + m^2) counts at that
-        level and makes the point an outlier of the hypothesis.
-    outlier_floor_m : float
-        The outlier level is at least this, metres.
-    huber_k : float
-        The whitened residuals z count z^2 / 2 up to this size and linearly beyond
-        (Huber): a few points that neither sensor noise nor a smooth mismatch explain (a
-        sharp feature, a slip of the stylus) do not decide the posterior alone.
-    """
-
-    sensor_noise_m: float | None = None
-    sensor_floor_m: float = 2.0e-6
-    model_mismatch_m: float = 5.0e-6
-    correlation_m: float = 5.0e-3
-    outlier_sigmas: float = 5.0
-    outlier_floor_m: float = 0.1e-3
-    huber_k: float = 3.0
-
-    def __post_init__(self) -> None:
-        values = {
-            "sensor_floor_m": self.sensor_floor_m,
-            "model_mismatch_m": self.model_mismatch_m,
-            "correlation_m": self.correlation_m,
-            "outlier_sigmas": self.outlier_sigmas,
-            "outlier_floor_m": self.outlier_floor_m,
-        }
-        if self.sensor_noise_m is not None:
-            values["sensor_noise_m"] = self.sensor_noise_m
-        for name, value in values.items():
-            if not (np.isfinite(value) and value >= 0):
-                raise InvalidArgument(f"NoiseModel.{name} must be finite and >= 0, got {value}")
-        if self.correlation_m <= 0 or self.outlier_sigmas <= 0:
-            raise InvalidArgument("NoiseModel: correlation_m and outlier_sigmas must be > 0")
-
-    def sensor_m(self, estimated_m: float) -> float:
-        """The sensor noise to use when the data's own scatter is ``estimated_m``."""
-        own = estimated_m if self.sensor_noise_m is None else self.sensor_noise_m
-        return max(float(own), self.sensor_floor_m)
-
-    def covariance(self, points: Array, sensor_m: float) -> Array:
-        """Sigma (n, n) of the residuals at ``points`` (n, 3), metres^2 (module docstring)."""
-        u = np.linalg.norm(points[:, None, :] - points[None, :, :], axis=-1)
-        u *= np.sqrt(3.0) / self.correlation_m
-        K = self.model_mismatch_m**2 * (1.0 + u) * np.exp(-u)
-        return K + sensor_m**2 * np.eye(len(points))
-
-    def log_likelihood(self, whitened: Array) -> float:
-        """The log-likelihood (up to a constant) of residuals whitened by Sigma's
-        Cholesky factor: -sum of :func:`huber` at ``huber_k``."""
-        return -float(np.sum(huber(whitened, self.huber_k)))
-
-    def point_sigma_m(self, sensor_m: float) -> float:
-        """One contact point's effective noise sqrt(s^2 + m^2), metres."""
-        return float(np.hypot(sensor_m, self.model_mismatch_m))
-
-    def outlier_level_m(self, sensor_m: float) -> float:
-        """Residual level beyond which a point is an outlier, metres."""
-        return max(self.outlier_sigmas * self.point_sigma_m(sensor_m), self.outlier_floor_m)
 
 
 @dataclass(frozen=True)
@@ -197,6 +124,11 @@ class BeliefConfig:
     prior_rotation_rad, prior_translation_m : float
         Standard deviations of the weak prior on each hypothesis's pose about its fit
         (keeps the Laplace covariance finite where the data leave a motion free).
+    touch_window_m : float
+        Were none of the hypotheses right, a touch's contact could lie anywhere along its
+        approach: this long, metres (the planner's standoff plus travel,
+        :class:`~recognition.surfaces.touch_planning.TouchLimits`). A touch scores each
+        hypothesis by the density it predicted for the contact against this spread.
     """
 
     error_ratio: float = 3.0
@@ -214,6 +146,7 @@ class BeliefConfig:
     explore_steps_m: tuple[float, ...] = (2.0e-3, 4.0e-3, 7.0e-3)
     prior_rotation_rad: float = 0.2
     prior_translation_m: float = 0.01
+    touch_window_m: float = 10.0e-3
 
 
 @dataclass(frozen=True)
@@ -429,9 +362,10 @@ class Belief:
         found += self._fitted(self._explored(found), models, whitening)
         found = _merged(found, self.point)
         logs = np.array([h.log_likelihood for h in found])
-        # "none of these": as likely as a fit whose whitened residuals sit at the
-        # (1 - unexplained_p) quantile of their chi-square law (n - 6 degrees of freedom)
-        dof = max(len(self.points) - 6, 1)
+        # "none of these": as likely as a fit whose curves' whitened residuals sit at the
+        # (1 - unexplained_p) quantile of their chi-square law (n - 6 degrees of freedom);
+        # the touches score each hypothesis against what "none" predicts (_evidence)
+        dof = max(self.n_curve_points - 6, 1)
         other = -float(gammaincinv(dof / 2.0, 1.0 - config.unexplained_p))
         top = max(float(logs.max()), other)
         weights = np.exp(logs - top)
@@ -481,14 +415,14 @@ class Belief:
             symmetries = model.symmetries
             for k in range(len(R)):
                 r = np.clip(signed[k], -level, level)
-                log_likelihood = self.noise.log_likelihood(whitening @ r)
-                log_likelihood += self._miss_penalty(model, R[k], t[k])
                 location = R[k] @ self.point + t[k]
                 rows = slice(k * len(self.points), (k + 1) * len(self.points))
                 smooth = smooth_normals(model, closest[rows], face[rows])
-                pivot, pose_cov, location_cov = self._laplace(
+                pivot, pose_cov, location_cov, leverage = self._laplace(
                     moved[k], smooth, np.abs(signed[k]) <= level, location, whitening
                 )
+                log_likelihood = self._evidence(whitening @ r, leverage, whitening)
+                log_likelihood += self._miss_penalty(model, R[k], t[k])
                 found.append(
                     Hypothesis(
                         name,
@@ -550,10 +484,12 @@ class Belief:
         inliers: NDArray[np.bool_],
         location: Array,
         whitening: Array,
-    ) -> tuple[Array, Array, Array]:
-        """The pivot, pose covariance (6, 6) and location covariance (3, 3) of a fit: the
-        inverse of J^T Sigma^-1 J plus the weak prior, J (n, 6) the residuals' change
-        under a turn about the pivot and a shift (outliers do not inform)."""
+    ) -> tuple[Array, Array, Array, Array]:
+        """The pivot, pose covariance (6, 6), location covariance (3, 3) and each point's
+        leverage (n,) of a fit: the covariance is the inverse of J^T Sigma^-1 J plus the
+        weak prior, J (n, 6) the residuals' change under a turn about the pivot and a
+        shift (outliers do not inform); the leverages are the diagonal of the whitened
+        hat matrix Jw C Jw^T, Jw = Sigma^-1/2 J."""
         pivot = moved[inliers].mean(axis=0) if inliers.any() else moved.mean(axis=0)
         J = np.concatenate([cross(moved - pivot, normals), normals], axis=1)
         J[~inliers] = 0.0
@@ -568,7 +504,29 @@ class Belief:
         arm = location - pivot
         skew = np.array([[0, -arm[2], arm[1]], [arm[2], 0, -arm[0]], [-arm[1], arm[0], 0]])
         Jp = np.concatenate([-skew, np.eye(3)], axis=1)  # d location / d (turn, shift)
-        return pivot, pose, Jp @ pose @ Jp.T
+        leverage = np.einsum("ij,jk,ik->i", Jw, pose, Jw)
+        return pivot, pose, Jp @ pose @ Jp.T, leverage
+
+    def _evidence(self, whitened: Array, leverage: Array, whitening: Array) -> float:
+        """Log-likelihood of the contact under a hypothesis, up to a constant shared with
+        "none of these" (module docstring): the curves' whitened residuals counted by
+        Huber's loss; each touch i by the log of the density N(0, L_ii^2 / (1 - h_ii))
+        at its leave-one-out residual, whitened residual over sqrt(1 - h_ii) counted by
+        Huber's loss, over the uniform density along the approach."""
+        n = self.n_curve_points
+        k = self.noise.huber_k
+        evidence = -float(np.sum(huber(whitened[:n], k)))
+        if len(whitened) > n:
+            keep = np.clip(1.0 - leverage[n:], 1e-12, 1.0)
+            spread = 1.0 / np.diag(whitening)[n:]  # L_ii: each touch's conditional noise
+            evidence += float(
+                np.sum(
+                    -huber(whitened[n:] / np.sqrt(keep), k)
+                    + 0.5 * np.log(keep)
+                    - np.log(np.sqrt(2.0 * np.pi) * spread / self.config.touch_window_m)
+                )
+            )
+        return evidence
 
     def _miss_penalty(self, model: MeshModel, R: Array, t: Array) -> float:
         """Log-likelihood of the touches that met nothing under a pose: a ray that the

@@ -13,11 +13,12 @@ import numpy as np
 import trimesh
 
 from recognition.errors import InvalidArgument, InvalidCurveData, InvalidModel
-from recognition.surfaces.belief import Belief, BeliefConfig, NoiseModel, curve_points
+from recognition.surfaces.belief import Belief, BeliefConfig, curve_points
 from recognition.surfaces.data_curves import DataCurves
 from recognition.surfaces.database_files import DATABASE_FORMAT, read_models, write_models
 from recognition.surfaces.distance import FieldStack
 from recognition.surfaces.mesh_model import MeshModel, MeshModelConfig
+from recognition.surfaces.noise_model import NoiseModel
 from recognition.surfaces.registration import (
     ALIGNED_SEARCH,
     CONFIGS,

@@ -5,6 +5,7 @@ import pytest
 from testing_meshes import blob, ellipsoid, sphere
 
 from recognition import (
+    BeliefConfig,
     InvalidArgument,
     ModelDatabase,
     NoiseModel,
@@ -99,6 +100,39 @@ def test_touches_tell_two_similar_models_apart(database):
     images = done.belief.best.location_images
     assert len(images) > 1
     assert np.linalg.norm(images - synthetic.point_in_model, axis=1).min() < 1e-3
+
+
+def test_touches_that_only_a_moved_pose_meets_do_not_make_a_wrong_model_sure(database):
+    # the object is the ellipsoid; only the larger one is offered: near its top every
+    # touch can be met by shifting it, but none was predicted, so "none of these" wins
+    model = database["ellipsoid"]
+    synthetic = _curves(model, 100, seed=3, noise=0.002e-3, n_points=11, spacing_m=0.3e-3)
+    result = database.recognize(
+        synthetic.curves,
+        models=["larger_ellipsoid"],
+        noise=NoiseModel(model_mismatch_m=0.02e-3),
+    )
+    rng = np.random.default_rng(0)
+
+    def touch(plan):
+        return ray_contact(
+            model.distance,
+            synthetic.T_model_from_data,
+            plan.start,
+            plan.direction,
+            plan.travel_m,
+            noise_m=0.002e-3,
+            rng=rng,
+        )
+
+    done = verify(database, result.belief, touch, _limits(synthetic), max_touches=6)
+    assert len(done.steps) >= 4
+    assert done.belief.confidence < 0.5
+    assert done.belief.unexplained > 0.5
+
+
+def test_none_of_these_spreads_a_touch_over_the_planned_approach():
+    assert BeliefConfig().touch_window_m == TouchLimits(up=np.array([0.0, 0.0, 1.0])).depth_m
 
 
 def test_a_sure_belief_makes_no_touch(database):
