@@ -244,13 +244,14 @@ class RobotToucher:
             return None
         sample = runner.sample(estimate)
         touched = sample.touched if np.all(np.isfinite(sample.touched)) else None
-        # The contact lies a tip radius from the sensed centre along the surface normal;
-        # the approach runs along the normal the hypotheses predict, which a single
-        # reading's force direction estimates less well (friction tilts it): the point a
-        # radius ahead of the centre along the approach is off the surface by only
-        # r (1 - cos) of the angle between them.
+        # The contact lies a tip radius from the sensed centre against the sensed normal
+        # (the reading's force direction; the approach's direction when the force gave
+        # none). The approach runs along the normal the hypotheses predict, often 5-15
+        # degrees off the true one: a point a radius ahead along it lay up to 0.19 mm off
+        # the surface (p90 0.075 mm), the sensed normal's within 0.003 mm (median 0.0005).
         radius = runner.rig.sensor.robot.probe.tip_radius_m
-        point = estimate.tip_centre_in_world + radius * plan.direction
+        normal = estimate.normal_in_world / np.linalg.norm(estimate.normal_in_world)
+        point = estimate.tip_centre_in_world - radius * normal
         self.made.append(
             (
                 point,

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import trimesh
 
-from recognition import DataCurves
+from recognition import DataCurves, TouchPlan
 from recognition.rigid import pose_matrix
 from tactile_sim.errors import (
     SimulationError,
@@ -17,6 +17,7 @@ from tactile_sim.errors import (
 )
 from tactile_sim.probing import ProbeScene, StopReason, build_probe_scene, probe_object
 from tactile_sim.probing.placement import MOUNT_IN_WORLD
+from tactile_sim.probing.touches import RobotToucher
 
 AT_MOUNT = pose_matrix(np.eye(3), MOUNT_IN_WORLD)
 """T_world_from_object: upright on the object mount, axes parallel to the world's."""
@@ -153,3 +154,22 @@ def test_curves_recognition_cannot_use_are_replanned_or_named() -> None:
     p = [0.0023077185884982643, -0.016780459432061995, 0.0613177107253435]
     with pytest.raises(UnusableCurves, match="parallel tangents"):
         probe_object("sphere", seed=seed, point=p, **settings)
+
+
+def test_a_robot_touch_off_the_surface_normal_reports_a_point_on_the_surface(
+    sphere_scene: ProbeScene,
+) -> None:
+    session = probe_object(
+        "sphere", seed=11, n_points=9, probe_scene=sphere_scene, first_plane_yaw_rad=0.2
+    )
+    centre = session.ground_truth.T_world_from_object[:3, 3] + [0.0, 0.0, 0.033]
+    outward = np.array([np.sin(0.5), 0.0, np.cos(0.5)])  # 29 degrees from the top
+    point = centre + 0.033 * outward
+    tilt = 0.21  # the approach runs 12 degrees off the inward normal
+    direction = -np.array([np.sin(0.5 + tilt), 0.0, np.cos(0.5 + tilt)])
+    plan = TouchPlan(point, direction, point - 4e-3 * direction, 10e-3, 1.0, np.zeros(1))
+    contact = RobotToucher(session)(plan)
+    assert contact is not None
+    _, off_mesh = sphere_scene.closest_points_in_world(contact[None])
+    # a tip radius ahead along the approach would lie r (1 - cos 12 deg) = 22 um off
+    assert off_mesh[0] < 5e-6
