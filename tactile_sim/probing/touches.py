@@ -244,14 +244,12 @@ class RobotToucher:
             return None
         sample = runner.sample(estimate)
         touched = sample.touched if np.all(np.isfinite(sample.touched)) else None
-        # The contact lies a tip radius from the sensed centre against the sensed normal
-        # (the reading's force direction; the approach's direction when the force gave
-        # none). The approach runs along the normal the hypotheses predict, often 5-15
-        # degrees off the true one: a point a radius ahead along it lay up to 0.19 mm off
-        # the surface (p90 0.075 mm), the sensed normal's within 0.003 mm (median 0.0005).
-        radius = runner.rig.sensor.robot.probe.tip_radius_m
-        normal = estimate.normal_in_world / np.linalg.norm(estimate.normal_in_world)
-        point = estimate.tip_centre_in_world - radius * normal
+        # The sensed contact: a tip radius from the sensed centre against the sensed
+        # normal (the reading's force direction; the approach's when the force gave none).
+        # The approach runs along the normal the hypotheses predict, often 5-15 degrees
+        # off the true one: a point a radius ahead along it lay up to 0.19 mm off the
+        # surface (p90 0.075 mm), the sensed one within 0.003 mm (median 0.0005).
+        point = estimate.point_in_world
         self.made.append(
             (
                 point,
