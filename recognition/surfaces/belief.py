@@ -106,10 +106,11 @@ class BeliefConfig:
     min_posterior : float
         Hypotheses whose posterior falls below this are dropped after an update.
     unexplained_p : float
-        The alternative "none of these" is as likely as a hypothesis whose whitened
+        The alternative "none of these" is as likely as a hypothesis whose curves' whitened
         residuals reach the (1 - ``unexplained_p``) quantile of their chi-square law: the
         rate at which the true hypothesis is doubted. When the search missed the truth,
-        the data soon fit no hypothesis that well and the confidence falls.
+        the curves fit no hypothesis that well, or touches that no hypothesis predicted
+        raise "none" (:attr:`touch_window_m`), and the confidence falls.
     radius_m : float
         An answer is right when it names the right model and puts p within this of the
         truth (the confidence's sense), metres.
@@ -488,11 +489,11 @@ class Belief:
         location: Array,
         whitening: Array,
     ) -> tuple[Array, Array, Array, Array]:
-        """The pivot, pose covariance (6, 6), location covariance (3, 3) and each point's
-        leverage (n,) of a fit: the covariance is the inverse of J^T Sigma^-1 J plus the
+        """The pivot, pose covariance (6, 6), location covariance (3, 3) and each touch's
+        leverage (k,) of a fit: the covariance is the inverse of J^T Sigma^-1 J plus the
         weak prior, J (n, 6) the residuals' change under a turn about the pivot and a
-        shift (outliers do not inform); the leverages are the diagonal of the whitened
-        hat matrix Jw C Jw^T, Jw = Sigma^-1/2 J."""
+        shift (outliers do not inform); the leverages are the touches' diagonal of the
+        whitened hat matrix Jw C Jw^T, Jw = Sigma^-1/2 J."""
         pivot = moved[inliers].mean(axis=0) if inliers.any() else moved.mean(axis=0)
         J = np.concatenate([cross(moved - pivot, normals), normals], axis=1)
         J[~inliers] = 0.0
@@ -507,20 +508,22 @@ class Belief:
         arm = location - pivot
         skew = np.array([[0, -arm[2], arm[1]], [arm[2], 0, -arm[0]], [-arm[1], arm[0], 0]])
         Jp = np.concatenate([-skew, np.eye(3)], axis=1)  # d location / d (turn, shift)
-        leverage = np.einsum("ij,jk,ik->i", Jw, pose, Jw)
+        touches = Jw[self.n_curve_points :]
+        leverage = np.einsum("ij,jk,ik->i", touches, pose, touches)
         return pivot, pose, Jp @ pose @ Jp.T, leverage
 
     def _evidence(self, whitened: Array, leverage: Array, whitening: Array) -> float:
         """Log-likelihood of the contact under a hypothesis, up to a constant shared with
         "none of these" (module docstring): the curves' whitened residuals counted by
-        Huber's loss; each touch i by the log of the density N(0, L_ii^2 / (1 - h_ii))
+        Huber's loss; each touch i (``leverage``: the touches' h_ii) by the log of the
+        density N(0, L_ii^2 / (1 - h_ii))
         at its leave-one-out residual, whitened residual over sqrt(1 - h_ii) counted by
         Huber's loss, over the uniform density along the approach."""
         n = self.n_curve_points
         k = self.noise.huber_k
         evidence = -float(np.sum(huber(whitened[:n], k)))
         if len(whitened) > n:
-            keep = np.clip(1.0 - leverage[n:], 1e-12, 1.0)
+            keep = np.clip(1.0 - leverage, 1e-12, 1.0)
             spread = 1.0 / np.diag(whitening)[n:]  # L_ii: each touch's conditional noise
             evidence += float(
                 np.sum(
