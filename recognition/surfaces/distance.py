@@ -147,11 +147,8 @@ class MeshDistance:
         """
         from recognition.surfaces import mesh_kernels
 
-        g = self.grid
         p = np.ascontiguousarray(np.asarray(points, float).reshape(-1, 3))
-        return mesh_kernels.closest_points(
-            self.vertices, self.faces, g.spheres, g.start, g.faces_of, g.origin, g.cell, g.shape, p
-        )
+        return mesh_kernels.closest_points(*self._closest_arrays(), p)
 
     def closest_to(self, x: float, y: float, z: float) -> tuple[float, float, float, float, int]:
         """The closest point on the mesh to one finite point (x, y, z), metres: its
@@ -159,20 +156,16 @@ class MeshDistance:
         caller that asks once per step (a probe's tip), without the arrays."""
         from recognition.surfaces import mesh_kernels
 
+        return mesh_kernels.closest_point(*self._closest_arrays(), float(x), float(y), float(z))
+
+    def _closest_arrays(
+        self,
+    ) -> tuple[
+        Array, IntArray, Array, NDArray[np.int32], NDArray[np.int32], Array, float, IntArray
+    ]:
+        """The mesh and its grid, as the closest-point kernels take them."""
         g = self.grid
-        return mesh_kernels.closest_point(
-            self.vertices,
-            self.faces,
-            g.spheres,
-            g.start,
-            g.faces_of,
-            g.origin,
-            g.cell,
-            g.shape,
-            float(x),
-            float(y),
-            float(z),
-        )
+        return self.vertices, self.faces, g.spheres, g.start, g.faces_of, g.origin, g.cell, g.shape
 
     def first_hits(self, origins: ArrayLike, directions: ArrayLike) -> tuple[IntArray, Array]:
         """The face each ray meets first (-1: none) and the distance to it along the ray
