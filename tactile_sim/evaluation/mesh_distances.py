@@ -7,7 +7,8 @@ import functools
 import subprocess
 import sys
 import time
-from collections.abc import Callable, Sequence
+import timeit
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -54,16 +55,6 @@ def _tree_bytes(name: str) -> int:
         [sys.executable, "-c", _TREE_BYTES, name], capture_output=True, text=True, check=True
     )
     return int(out.stdout.split()[-1])
-
-
-def _best_seconds(call: Callable[[], object], repeats: int = 3) -> float:
-    """The least wall time of ``repeats`` calls, seconds."""
-    best = np.inf
-    for _ in range(repeats):
-        start = time.perf_counter()
-        call()
-        best = min(best, time.perf_counter() - start)
-    return float(best)
 
 
 def compare_with_libigl(
@@ -116,11 +107,14 @@ def _compare_one(name: str, queries: int, rng: np.random.Generator) -> dict[str,
         row["largest_difference_m"] = max(
             row["largest_difference_m"], float(np.max(np.abs(ours - theirs)))
         )
-        row[f"grid_points_per_s_{offset_mm:g}mm"] = queries / _best_seconds(
-            lambda p=points: grid.closest(p)
+        # the best of three calls
+        row[f"grid_points_per_s_{offset_mm:g}mm"] = queries / min(
+            timeit.repeat(lambda p=points: grid.closest(p), number=1, repeat=3)
         )
-        row[f"tree_points_per_s_{offset_mm:g}mm"] = queries / _best_seconds(
-            lambda p=points: tree.squared_distance(vertices, faces, p)
+        row[f"tree_points_per_s_{offset_mm:g}mm"] = queries / min(
+            timeit.repeat(
+                lambda p=points: tree.squared_distance(vertices, faces, p), number=1, repeat=3
+            )
         )
     return row
 
