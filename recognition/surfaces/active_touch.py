@@ -145,7 +145,9 @@ def verify(
         if contact is None:
             belief = database.update(belief, misses=[(plan.start, plan.direction, plan.travel_m)])
         else:
-            belief = database.update(belief, np.asarray(contact, float)[None])
+            belief = database.update(
+                belief, np.asarray(contact, float)[None], windows=[plan.travel_m]
+            )
         best = belief.best
         steps.append(
             TouchStep(

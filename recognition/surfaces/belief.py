@@ -30,10 +30,10 @@ A touch counts by how well h predicted it: its residual given all the other cont
 (leave-one-out: a pose refitted to the touch would otherwise explain any touch at all),
 whitened residual z_i over sqrt(1 - h_ii) with h_ii the touch's leverage on the pose fit,
 density N(0, L_ii^2 / (1 - h_ii)) with L_ii its conditional noise, against the uniform
-spread along the approach that "none of these" predicts
-(:attr:`BeliefConfig.touch_window_m`). A hypothesis that predicted the touch within its
-pose's uncertainty gains on "none"; one that had to move to meet it loses, and when no
-hypothesis predicted the touches, "none of these" grows.
+spread along the touch's approach that "none of these" predicts (:attr:`Belief.windows`).
+A hypothesis that predicted the touch within its pose's uncertainty gains on "none"; one
+that had to move to meet it loses, and when no hypothesis predicted the touches, "none of
+these" grows.
 
 Each hypothesis also carries the uncertainty of its pose (Laplace: the inverse of
 J^T Sigma^-1 J, J the point-to-plane Jacobian of the residuals, with a weak prior) and so
@@ -130,7 +130,8 @@ class BeliefConfig:
         (keeps the Laplace covariance finite where the data leave a motion free).
     touch_window_m : float
         Were none of the hypotheses right, a touch's contact could lie anywhere along its
-        approach: this long, metres (the planner's standoff plus travel,
+        approach: this long, metres, for a touch given without its approach's length
+        (:meth:`Belief.with_contacts`; the planner's default standoff plus travel,
         :class:`~recognition.surfaces.touch_planning.TouchLimits`). A touch scores each
         hypothesis by the density it predicted for the contact against this spread.
     """
@@ -235,6 +236,9 @@ class Belief:
     noise : NoiseModel
     config : BeliefConfig
     misses : tuple of (start (3,), direction (3,), travel) per touch that met nothing
+    windows : (k,) float
+        The length of each touch's approach (``points`` after the curves'), metres: where
+        its contact could have lain.
     unexplained : float
         Posterior that none of the hypotheses is the truth (module docstring).
     curves : DataCurves or None
@@ -251,6 +255,7 @@ class Belief:
     noise: NoiseModel = NoiseModel()
     config: BeliefConfig = BeliefConfig()
     misses: tuple[tuple[Array, Array, float], ...] = ()
+    windows: Array = field(default_factory=lambda: np.zeros(0))
     unexplained: float = 0.0
     curves: DataCurves | None = field(default=None, repr=False)
     broadened: bool = False
@@ -320,13 +325,24 @@ class Belief:
         models: Mapping[str, MeshModel],
         points: ArrayLike | None = None,
         misses: Sequence[tuple[ArrayLike, ArrayLike, float]] = (),
+        windows: ArrayLike | None = None,
     ) -> Belief:
         """The belief after further contact: ``points`` (k, 3) touched (data frame,
         metres) and ``misses`` (start, unit direction, travel in metres) that met no
-        surface. Every hypothesis is refined on all the points and scored again."""
+        surface; ``windows`` (k,): each touch's approach length, metres, along which its
+        contact could have lain (default ``config.touch_window_m``). Every hypothesis is
+        refined on all the points and scored again."""
         new = np.zeros((0, 3)) if points is None else np.asarray(points, float).reshape(-1, 3)
         if not np.all(np.isfinite(new)):
             raise InvalidArgument("contact points must be finite (n, 3) metres")
+        if windows is None:
+            lengths = np.full(len(new), self.config.touch_window_m)
+        else:
+            lengths = np.asarray(windows, float).reshape(-1)
+        if lengths.shape != (len(new),) or not np.all(np.isfinite(lengths) & (lengths > 0)):
+            raise InvalidArgument(
+                f"windows must be one positive length (metres) per contact point, got {windows!r}"
+            )
         moved = [
             (np.asarray(s, float), np.asarray(d, float) / np.linalg.norm(d), float(t))
             for s, d, t in misses
@@ -336,6 +352,7 @@ class Belief:
             hypotheses=(),
             points=np.concatenate([self.points, new]),
             misses=(*self.misses, *moved),
+            windows=np.concatenate([self.windows, lengths]),
         )
         return belief._rescored([(h.model, h.T_model_from_data) for h in self.hypotheses], models)
 
@@ -529,7 +546,7 @@ class Belief:
                 np.sum(
                     -huber(whitened[n:] / np.sqrt(keep), k)
                     + 0.5 * np.log(keep)
-                    - np.log(np.sqrt(2.0 * np.pi) * spread / self.config.touch_window_m)
+                    - np.log(np.sqrt(2.0 * np.pi) * spread / self.windows)
                 )
             )
         return evidence

@@ -258,11 +258,12 @@ class ModelDatabase:
         belief: Belief,
         points: np.ndarray | None = None,
         misses: list[tuple[np.ndarray, np.ndarray, float]] | tuple = (),
+        windows: np.ndarray | list[float] | None = None,
     ) -> Belief:
         """``belief`` after further contact (:meth:`Belief.with_contacts`): touched
-        ``points`` (k, 3) in the curves' frame, metres, and ``misses`` (start, direction,
-        travel) that met nothing."""
-        return belief.with_contacts(self.models, points, misses)
+        ``points`` (k, 3) in the curves' frame, metres, ``misses`` (start, direction,
+        travel) that met nothing, and each touch's approach length ``windows`` (k,)."""
+        return belief.with_contacts(self.models, points, misses, windows)
 
     def broaden(self, belief: Belief) -> Belief:
         """``belief`` with the poses of a broader search of its curves added (the fast

@@ -123,6 +123,9 @@ def test_a_touch_counts_by_the_density_its_hypothesis_predicted_for_it(database,
     expected -= 0.5 * (off_m / s) ** 2
     gain = after.best.log_likelihood - before.best.log_likelihood
     assert gain == pytest.approx(expected, abs=0.5)
+    # an approach twice as long made the contact half as likely under "none of these"
+    longer = database.update(before, touched[None], windows=[2 * BeliefConfig().touch_window_m])
+    assert longer.best.log_likelihood - after.best.log_likelihood == pytest.approx(np.log(2))
 
 
 def test_none_of_these_spreads_a_touch_over_the_planned_approach():
@@ -188,5 +191,9 @@ def test_bad_arguments_are_refused_with_typed_errors(database):
         TouchLimits(up=np.zeros(3))
     with pytest.raises(InvalidArgument, match="finite"):
         database.update(result.belief, np.full((1, 3), np.nan))
+    with pytest.raises(InvalidArgument, match="windows"):
+        database.update(result.belief, synthetic.curves.intersection[None], windows=[0.0])
+    with pytest.raises(InvalidArgument, match="windows"):
+        database.update(result.belief, synthetic.curves.intersection[None], windows=[1e-3, 2e-3])
     with pytest.raises(InvalidArgument, match="model_mismatch_m"):
         NoiseModel(model_mismatch_m=-1.0)
