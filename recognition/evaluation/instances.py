@@ -26,6 +26,7 @@ from recognition.evaluation.models import Database
 from recognition.surfaces.data_curves import DataCurves
 
 if TYPE_CHECKING:
+    from recognition.surfaces.active_touch import Contact
     from recognition.surfaces.touch_planning import TouchLimits, TouchPlan
 
 __all__ = ["Instance", "InstanceSource", "InstanceSpec"]
@@ -76,9 +77,9 @@ class Instance:
         The same instance without measurement error (e.g. the simulator's true contact
         points); recognised too, as a diagnosis, when given.
     touch : callable or None
-        ``touch(plan) -> contact point (3,) in the curves' frame, or None`` (nothing met
-        along the planned approach): further contact for verification touches
-        (:func:`recognition.verify`); None: the source cannot touch.
+        ``touch(plan) -> Contact`` (or its point (3,)) in the curves' frame, or None
+        (nothing met along the planned approach): further contact for verification
+        touches (:func:`recognition.verify`); None: the source cannot touch.
     touch_limits : TouchLimits or None
         The touches ``touch`` can make.
     """
@@ -87,7 +88,7 @@ class Instance:
     point_in_model: NDArray[np.float64] | None = None
     info: Mapping[str, Any] = field(default_factory=dict)
     reference_curves: DataCurves | None = None
-    touch: Callable[[TouchPlan], NDArray[np.float64] | None] | None = None
+    touch: Callable[[TouchPlan], Contact | NDArray[np.float64] | None] | None = None
     touch_limits: TouchLimits | None = None
 
 

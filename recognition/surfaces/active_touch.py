@@ -2,8 +2,9 @@
 
 After the three curves, :func:`verify` repeats: plan the touch of greatest expected
 information gain (:func:`~recognition.surfaces.touch_planning.plan_touch`), make it
-(``touch``: the robot, or a ray cast on a known surface in a benchmark), refine and
-re-score every hypothesis with all the contact (:meth:`Belief.with_contacts`); when no
+(``touch``: the robot, or a ray cast on a known surface in a benchmark; its contact point,
+with the surface normal when the sensor gives one), refine and re-score every hypothesis
+with all the contact (:meth:`Belief.with_contacts`); when no
 hypothesis explains the contact any more, the curves are searched again more broadly
 (once, :meth:`~recognition.surfaces.database.ModelDatabase.broaden`). It stops once the
 belief's confidence (:attr:`Belief.confidence`) reaches ``confidence``, the touches are
@@ -25,13 +26,29 @@ from recognition.surfaces.belief import Belief
 from recognition.surfaces.database import ModelDatabase
 from recognition.surfaces.touch_planning import TouchLimits, TouchPlan
 
-__all__ = ["BROADEN_AT", "TouchStep", "Verification", "verify"]
+__all__ = ["BROADEN_AT", "Contact", "TouchStep", "Verification", "verify"]
 
 Array = NDArray[np.float64]
 
 #: When "none of these" is at least this probable, the search is broadened once
 #: (:meth:`~recognition.surfaces.database.ModelDatabase.broaden`) before the next touch.
 BROADEN_AT = 0.5
+
+
+@dataclass(frozen=True)
+class Contact:
+    """What a touch sensed, data frame.
+
+    Attributes
+    ----------
+    point : (3,) float
+        The contact point, metres.
+    normal : (3,) float or None
+        The outward unit surface normal there, when the sensor gives one.
+    """
+
+    point: Array
+    normal: Array | None = None
 
 
 @dataclass(frozen=True)
@@ -43,6 +60,8 @@ class TouchStep:
     plan : TouchPlan
     contact : (3,) float or None
         The sensed contact point, data frame, metres (None: nothing met within the travel).
+    normal : (3,) float or None
+        The sensed outward normal there, data frame (None: none sensed).
     confidence : float
         The best hypothesis's posterior after the update.
     best_model : str or None
@@ -59,6 +78,7 @@ class TouchStep:
     best_model: str | None
     recognition_time_s: float
     belief: Belief
+    normal: Array | None = None
 
 
 @dataclass(frozen=True)
@@ -88,7 +108,7 @@ class Verification:
 def verify(
     database: ModelDatabase,
     belief: Belief,
-    touch: Callable[[TouchPlan], Array | None],
+    touch: Callable[[TouchPlan], Contact | Array | None],
     limits: TouchLimits,
     *,
     max_touches: int = 5,
@@ -104,8 +124,8 @@ def verify(
     belief : Belief
         After the curves (:attr:`Recognition.belief`).
     touch : callable
-        ``touch(plan) -> (3,) contact point in the data frame, or None`` (no contact
-        within ``plan.travel_m`` of ``plan.start`` along ``plan.direction``).
+        ``touch(plan) -> Contact`` (or its (3,) point alone) in the data frame, or None
+        (no contact within ``plan.travel_m`` of ``plan.start`` along ``plan.direction``).
     limits : TouchLimits
     max_touches : int
         At most this many touches (0: none, the thesis's behaviour).
@@ -140,23 +160,29 @@ def verify(
         if plan is None:
             stop = "no informative touch"
             break
-        contact = touch(plan)
+        sensed = touch(plan)
         start = time.perf_counter()
+        contact = sensed if sensed is None or isinstance(sensed, Contact) else Contact(sensed)
         if contact is None:
             belief = database.update(belief, misses=[(plan.start, plan.direction, plan.travel_m)])
         else:
+            normal = np.full(3, np.nan) if contact.normal is None else contact.normal
             belief = database.update(
-                belief, np.asarray(contact, float)[None], windows=[plan.travel_m]
+                belief,
+                np.asarray(contact.point, float)[None],
+                windows=[plan.travel_m],
+                normals=np.asarray(normal, float)[None],
             )
         best = belief.best
         steps.append(
             TouchStep(
                 plan,
-                None if contact is None else np.asarray(contact, float),
+                None if contact is None else np.asarray(contact.point, float),
                 belief.confidence,
                 None if best is None else best.model,
                 planned + time.perf_counter() - start,
                 belief,
+                None if contact is None or contact.normal is None else belief.normals[-1],
             )
         )
     return Verification(belief, tuple(steps), initial, stop, broaden_s)

@@ -26,14 +26,14 @@ curves' points (its whitened residuals counted by Huber's loss beyond ``huber_k`
 that none of them is right (:attr:`BeliefConfig.unexplained_p`: a search can miss the
 truth).
 
-A touch counts by how well h predicted it: its residual given all the other contact
-(leave-one-out: a pose refitted to the touch would otherwise explain any touch at all),
-whitened residual z_i over sqrt(1 - h_ii) with h_ii the touch's leverage on the pose fit,
-density N(0, L_ii^2 / (1 - h_ii)) with L_ii its conditional noise, against the uniform
-spread along the touch's approach that "none of these" predicts (:attr:`Belief.windows`).
-A hypothesis that predicted the touch within its pose's uncertainty gains on "none"; one
-that had to move to meet it loses, and when no hypothesis predicted the touches, "none of
-these" grows.
+A touch counts by how well h predicted it (:mod:`recognition.surfaces.touch_evidence`):
+its contact point given all the other contact (leave-one-out), against the uniform spread
+along the touch's approach that "none of these" predicts (:attr:`Belief.windows`), and its
+sensed normal, when the sensor gives one (:attr:`Belief.normals`), against the normal h
+predicts there, with the uncertainty of h's turn. A hypothesis that predicted the touch
+within its pose's uncertainty gains on "none"; one that had to move to meet it, or that
+tilts the surface there otherwise, loses, and when no hypothesis predicted the touches,
+"none of these" grows.
 
 Each hypothesis also carries the uncertainty of its pose (Laplace: the inverse of
 J^T Sigma^-1 J, J the point-to-plane Jacobian of the residuals, with a weak prior) and so
@@ -60,6 +60,12 @@ from recognition.surfaces.mesh_model import MeshModel
 from recognition.surfaces.noise_model import NoiseModel, huber
 from recognition.surfaces.registration.ambiguity import distinct_poses
 from recognition.surfaces.registration.exact import smooth_normals
+from recognition.surfaces.touch_evidence import (
+    miss_evidence,
+    normal_evidence,
+    point_evidence,
+    sensed_normals,
+)
 
 __all__ = ["Belief", "BeliefConfig", "Hypothesis", "curve_points"]
 
@@ -168,8 +174,9 @@ class Hypothesis:
         Mean distance of all contact points from the model (4.8), outliers at the
         outlier level, metres.
     log_likelihood : float
-        Of the clipped residuals whitened by Sigma, each counted by Huber's loss, and of
-        the misses (:meth:`Belief._miss_penalty`); up to a constant (module docstring).
+        Of all the contact (module docstring): the clipped residuals whitened by Sigma,
+        each counted by Huber's loss, the touches' normals and misses
+        (:mod:`~recognition.surfaces.touch_evidence`); up to a constant.
     posterior : float
     outliers : (k,) int
         Indices (into :attr:`Belief.points`) of the points beyond the outlier level.
@@ -239,6 +246,8 @@ class Belief:
     windows : (k,) float
         The length of each touch's approach (``points`` after the curves'), metres: where
         its contact could have lain.
+    normals : (k, 3) float
+        Each touch's sensed outward unit normal, data frame (a row of NaN: none sensed).
     unexplained : float
         Posterior that none of the hypotheses is the truth (module docstring).
     curves : DataCurves or None
@@ -256,6 +265,7 @@ class Belief:
     config: BeliefConfig = BeliefConfig()
     misses: tuple[tuple[Array, Array, float], ...] = ()
     windows: Array = field(default_factory=lambda: np.zeros(0))
+    normals: Array = field(default_factory=lambda: np.zeros((0, 3)))
     unexplained: float = 0.0
     curves: DataCurves | None = field(default=None, repr=False)
     broadened: bool = False
@@ -326,15 +336,18 @@ class Belief:
         points: ArrayLike | None = None,
         misses: Sequence[tuple[ArrayLike, ArrayLike, float]] = (),
         windows: ArrayLike | None = None,
+        normals: ArrayLike | None = None,
     ) -> Belief:
         """The belief after further contact: ``points`` (k, 3) touched (data frame,
         metres) and ``misses`` (start, unit direction, travel in metres) that met no
         surface; ``windows`` (k,): each touch's approach length, metres, along which its
-        contact could have lain (default ``config.touch_window_m``). Every hypothesis is
-        refined on all the points and scored again."""
+        contact could have lain (default ``config.touch_window_m``); ``normals`` (k, 3):
+        the outward surface normal sensed at each (a row of NaN, or None for all: none).
+        Every hypothesis is refined on all the points and scored again."""
         new = np.zeros((0, 3)) if points is None else np.asarray(points, float).reshape(-1, 3)
         if not np.all(np.isfinite(new)):
             raise InvalidArgument("contact points must be finite (n, 3) metres")
+        sensed = sensed_normals(normals, len(new))
         if windows is None:
             lengths = np.full(len(new), self.config.touch_window_m)
         else:
@@ -353,6 +366,7 @@ class Belief:
             points=np.concatenate([self.points, new]),
             misses=(*self.misses, *moved),
             windows=np.concatenate([self.windows, lengths]),
+            normals=np.concatenate([self.normals, sensed]),
         )
         return belief._rescored([(h.model, h.T_model_from_data) for h in self.hypotheses], models)
 
@@ -443,7 +457,21 @@ class Belief:
                     moved[k], smooth, np.abs(signed[k]) <= level, location, whitening
                 )
                 log_likelihood = self._evidence(whitening @ r, leverage, whitening)
-                log_likelihood += self._miss_penalty(model, R[k], t[k])
+                log_likelihood += normal_evidence(
+                    smooth[self.n_curve_points :],
+                    self.normals @ R[k].T,
+                    pose_cov[:3, :3],
+                    self.noise.normal_sigma_rad(),
+                    self.noise.huber_k,
+                )
+                log_likelihood += miss_evidence(
+                    model.distance,
+                    R[k],
+                    t[k],
+                    self.misses,
+                    self.noise.point_sigma_m(self.sensor_m),
+                    self.noise.huber_k,
+                )
                 found.append(
                     Hypothesis(
                         name,
@@ -530,42 +558,16 @@ class Belief:
         return pivot, pose, Jp @ pose @ Jp.T, leverage
 
     def _evidence(self, whitened: Array, leverage: Array, whitening: Array) -> float:
-        """Log-likelihood of the contact under a hypothesis, up to a constant shared with
-        "none of these" (module docstring): the curves' whitened residuals counted by
-        Huber's loss; each touch i (``leverage``: the touches' h_ii) by the log of the
-        density N(0, L_ii^2 / (1 - h_ii))
-        at its leave-one-out residual, whitened residual over sqrt(1 - h_ii) counted by
-        Huber's loss, over the uniform density along the approach."""
+        """Log-likelihood of the contact points under a hypothesis, up to a constant shared
+        with "none of these" (module docstring): the curves' whitened residuals counted by
+        Huber's loss; each touch (``leverage``: the touches' h_ii) by
+        :func:`~recognition.surfaces.touch_evidence.point_evidence`."""
         n = self.n_curve_points
         k = self.noise.huber_k
-        evidence = -float(np.sum(huber(whitened[:n], k)))
-        if len(whitened) > n:
-            keep = np.clip(1.0 - leverage, 1e-12, 1.0)
-            spread = 1.0 / np.diag(whitening)[n:]  # L_ii: each touch's conditional noise
-            evidence += float(
-                np.sum(
-                    -huber(whitened[n:] / np.sqrt(keep), k)
-                    + 0.5 * np.log(keep)
-                    - np.log(np.sqrt(2.0 * np.pi) * spread / self.windows)
-                )
-            )
-        return evidence
-
-    def _miss_penalty(self, model: MeshModel, R: Array, t: Array) -> float:
-        """Log-likelihood of the touches that met nothing under a pose: a ray that the
-        posed model's surface crosses within the travel is a contact it predicts but that
-        did not happen; it costs Huber's loss of the deepest point of the ray inside the
-        model, in effective noise levels sqrt(s^2 + m^2) (a surface the ray just grazes
-        costs little, one it runs deep into costs much)."""
-        penalty = 0.0
-        sigma = self.noise.point_sigma_m(self.sensor_m)
-        for start, direction, travel in self.misses:
-            steps = np.arange(0.0, travel + 0.05e-3, 0.1e-3)
-            ray = start + steps[:, None] * direction
-            deepest = float(model.distance.signed(ray @ R.T + t).min())
-            if deepest < 0:
-                penalty -= float(huber(np.array([deepest / sigma]), self.noise.huber_k)[0])
-        return penalty
+        spread = 1.0 / np.diag(whitening)[n:]  # L_ii: each touch's conditional noise
+        return -float(np.sum(huber(whitened[:n], k))) + point_evidence(
+            whitened[n:], leverage, spread, self.windows, k
+        )
 
 
 def _merged(found: Sequence[Hypothesis], point: Array) -> list[Hypothesis]:

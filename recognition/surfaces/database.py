@@ -259,11 +259,13 @@ class ModelDatabase:
         points: np.ndarray | None = None,
         misses: list[tuple[np.ndarray, np.ndarray, float]] | tuple = (),
         windows: np.ndarray | list[float] | None = None,
+        normals: np.ndarray | None = None,
     ) -> Belief:
         """``belief`` after further contact (:meth:`Belief.with_contacts`): touched
         ``points`` (k, 3) in the curves' frame, metres, ``misses`` (start, direction,
-        travel) that met nothing, and each touch's approach length ``windows`` (k,)."""
-        return belief.with_contacts(self.models, points, misses, windows)
+        travel) that met nothing, each touch's approach length ``windows`` (k,) and the
+        surface normal sensed there, ``normals`` (k, 3) (rows of NaN: none)."""
+        return belief.with_contacts(self.models, points, misses, windows, normals)
 
     def broaden(self, belief: Belief) -> Belief:
         """``belief`` with the poses of a broader search of its curves added (the fast

@@ -6,7 +6,11 @@
 
 sensor noise s independent per point, the object's mismatch from its model m a field of
 correlation length l along the surface (:mod:`recognition.surfaces.belief` explains the
-choice); residuals are counted by Huber's loss.
+choice); residuals are counted by Huber's loss. A sensed contact normal differs from the
+model's by the sensor's error and by the mismatch's slope, each component across the
+normal with standard deviation
+
+    sqrt(s_n^2 + 3 m^2 / l^2)   (the Matern 3/2 field's slope: -k''(0) = 3 / l^2).
 """
 
 from __future__ import annotations
@@ -55,6 +59,12 @@ class NoiseModel:
         The whitened residuals z count z^2 / 2 up to this size and linearly beyond
         (Huber): a few points that neither sensor noise nor a smooth mismatch explain (a
         sharp feature, a slip of the stylus) do not decide the posterior alone.
+    normal_sd_rad : float
+        Standard deviation of each component of a sensed contact normal across the true
+        normal, radians. The default is the simulated robot's: over 23 verification
+        touches of 20 catalog sessions its sensed normals lay 1.3 deg (median), 2.5 deg
+        (RMS) and at most 6.6 deg from the mesh's face normal at MuJoCo's contact, i.e.
+        about 1.8 deg per component.
     """
 
     sensor_noise_m: float | None = None
@@ -64,6 +74,7 @@ class NoiseModel:
     outlier_sigmas: float = 5.0
     outlier_floor_m: float = 0.1e-3
     huber_k: float = 3.0
+    normal_sd_rad: float = float(np.deg2rad(2.0))
 
     def __post_init__(self) -> None:
         values = {
@@ -72,14 +83,17 @@ class NoiseModel:
             "correlation_m": self.correlation_m,
             "outlier_sigmas": self.outlier_sigmas,
             "outlier_floor_m": self.outlier_floor_m,
+            "normal_sd_rad": self.normal_sd_rad,
         }
         if self.sensor_noise_m is not None:
             values["sensor_noise_m"] = self.sensor_noise_m
         for name, value in values.items():
             if not (np.isfinite(value) and value >= 0):
                 raise InvalidArgument(f"NoiseModel.{name} must be finite and >= 0, got {value}")
-        if self.correlation_m <= 0 or self.outlier_sigmas <= 0:
-            raise InvalidArgument("NoiseModel: correlation_m and outlier_sigmas must be > 0")
+        if self.correlation_m <= 0 or self.outlier_sigmas <= 0 or self.normal_sd_rad <= 0:
+            raise InvalidArgument(
+                "NoiseModel: correlation_m, outlier_sigmas and normal_sd_rad must be > 0"
+            )
 
     def sensor_m(self, estimated_m: float) -> float:
         """The sensor noise to use when the data's own scatter is ``estimated_m``."""
@@ -100,3 +114,9 @@ class NoiseModel:
     def outlier_level_m(self, sensor_m: float) -> float:
         """Residual level beyond which a point is an outlier, metres."""
         return max(self.outlier_sigmas * self.point_sigma_m(sensor_m), self.outlier_floor_m)
+
+    def normal_sigma_rad(self) -> float:
+        """Standard deviation of each component of a sensed normal across the model's at
+        the true pose, radians: the sensor's and the mismatch's slope (module docstring)."""
+        slope = np.sqrt(3.0) * self.model_mismatch_m / self.correlation_m
+        return float(np.hypot(self.normal_sd_rad, slope))

@@ -21,6 +21,7 @@ from numpy.typing import NDArray
 
 from recognition import (
     BeliefConfig,
+    Contact,
     ModelDatabase,
     NoiseModel,
     Recognition,
@@ -231,8 +232,9 @@ class RobotToucher:
         self.limits = touch_limits(session)
         self.made: list[tuple[Array | None, Array | None, Array | None, float, float]] = []
 
-    def __call__(self, plan: TouchPlan) -> Array | None:
-        """The sensed contact of the planned touch (None: nothing within its travel)."""
+    def __call__(self, plan: TouchPlan) -> Contact | None:
+        """The sensed contact of the planned touch (None: nothing within its travel); its
+        normal when the reading's force gave one."""
         runner = self.runner
         began = time.perf_counter()
         runner.retreat()
@@ -259,4 +261,4 @@ class RobotToucher:
                 estimate.reading.time_s,
             )
         )
-        return point
+        return Contact(point, estimate.normal_in_world if estimate.normal_from_force else None)

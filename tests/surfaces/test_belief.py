@@ -6,6 +6,7 @@ from testing_meshes import blob, ellipsoid, sphere
 
 from recognition import (
     BeliefConfig,
+    Contact,
     InvalidArgument,
     ModelDatabase,
     NoiseModel,
@@ -13,6 +14,7 @@ from recognition import (
     verify,
 )
 from recognition.surfaces.mesh_model import MeshModel
+from recognition.surfaces.noise_model import huber
 from recognition.surfaces.touch_planning import information_gain, predicted_depths
 from recognition.synthetic import mesh_data_curves, ray_contact
 
@@ -128,6 +130,60 @@ def test_a_touch_counts_by_the_density_its_hypothesis_predicted_for_it(database,
     assert longer.best.log_likelihood - after.best.log_likelihood == pytest.approx(np.log(2))
 
 
+@pytest.mark.parametrize("tilt_deg", [0.0, 15.0])
+def test_a_touchs_sensed_normal_counts_by_how_far_it_tilts_from_the_hypothesis(database, tilt_deg):
+    # the same touch with the blob's own normal there gains -log s_n^2 on the touch
+    # without one; tilted 15 degrees (7.5 s_n) it loses Huber's loss of the tilt on that
+    model = database["blob"]
+    synthetic = _curves(model, 2500, seed=1, noise=0.005e-3)
+    before = database.recognize(synthetic.curves, models=["blob"]).belief
+    p = synthetic.point_in_model
+    v = int(np.argmin(np.abs(np.linalg.norm(model.vertices - p, axis=1) - 8e-3)))
+    data_from_model = np.linalg.inv(synthetic.T_model_from_data)
+    touched = data_from_model[:3, :3] @ model.vertices[v] + data_from_model[:3, 3]
+    normal = model.normals[v]
+    side = np.cross(normal, [1.0, 0.0, 0.0])
+    side /= np.linalg.norm(side)
+    tilt = np.deg2rad(tilt_deg)
+    sensed = data_from_model[:3, :3] @ (np.cos(tilt) * normal + np.sin(tilt) * side)
+    bare = database.update(before, touched[None])
+    with_normal = database.update(before, touched[None], normals=sensed[None])
+    s = before.noise.normal_sigma_rad()
+    expected = -huber(np.array([tilt / s]), before.noise.huber_k)[0] - np.log(s**2)
+    gain = with_normal.best.log_likelihood - bare.best.log_likelihood
+    assert gain == pytest.approx(expected, abs=0.1)
+    np.testing.assert_allclose(with_normal.normals, sensed[None], atol=1e-12)
+    assert np.all(np.isnan(bare.normals))
+
+
+def test_verification_takes_the_touchs_normal_when_the_sensor_gives_one(database):
+    model = database["ellipsoid"]
+    vertex = int(np.argmax(model.vertices[:, 2]))
+    synthetic = _curves(model, vertex, seed=3, noise=0.002e-3, n_points=11, spacing_m=0.3e-3)
+    result = database.recognize(
+        synthetic.curves,
+        models=["ellipsoid", "larger_ellipsoid"],
+        noise=NoiseModel(model_mismatch_m=0.02e-3),
+    )
+    data_from_model = np.linalg.inv(synthetic.T_model_from_data)
+
+    def touch(plan):
+        point = ray_contact(
+            model.distance, synthetic.T_model_from_data, plan.start, plan.direction, 0.02
+        )
+        if point is None:
+            return None
+        T = synthetic.T_model_from_data
+        _, _, face = model.distance.closest((T[:3, :3] @ point + T[:3, 3])[None])
+        return Contact(point, data_from_model[:3, :3] @ model.mesh.face_normals[face[0]])
+
+    done = verify(database, result.belief, touch, _limits(synthetic), max_touches=5)
+    assert done.belief.best.model == "ellipsoid" and done.stop == "sure"
+    made = [step for step in done.steps if step.contact is not None]
+    assert made and all(step.normal is not None for step in made)
+    assert np.all(np.isfinite(done.belief.normals)) and len(done.belief.normals) == len(made)
+
+
 def test_none_of_these_spreads_a_touch_over_the_planned_approach():
     assert BeliefConfig().touch_window_m == TouchLimits(up=np.array([0.0, 0.0, 1.0])).depth_m
 
@@ -195,5 +251,7 @@ def test_bad_arguments_are_refused_with_typed_errors(database):
         database.update(result.belief, synthetic.curves.intersection[None], windows=[0.0])
     with pytest.raises(InvalidArgument, match="windows"):
         database.update(result.belief, synthetic.curves.intersection[None], windows=[1e-3, 2e-3])
+    with pytest.raises(InvalidArgument, match="normals"):
+        database.update(result.belief, synthetic.curves.intersection[None], normals=np.ones(3))
     with pytest.raises(InvalidArgument, match="model_mismatch_m"):
         NoiseModel(model_mismatch_m=-1.0)

@@ -156,7 +156,7 @@ def test_curves_recognition_cannot_use_are_replanned_or_named() -> None:
         probe_object("sphere", seed=seed, point=p, **settings)
 
 
-def test_a_robot_touch_off_the_surface_normal_reports_a_point_on_the_surface(
+def test_a_robot_touch_off_the_surface_normal_reports_a_point_on_the_surface_and_its_normal(
     sphere_scene: ProbeScene,
 ) -> None:
     session = probe_object(
@@ -169,7 +169,10 @@ def test_a_robot_touch_off_the_surface_normal_reports_a_point_on_the_surface(
     direction = -np.array([np.sin(0.5 + tilt), 0.0, np.cos(0.5 + tilt)])
     plan = TouchPlan(point, direction, point - 4e-3 * direction, 10e-3, 1.0, np.zeros(1))
     contact = RobotToucher(session)(plan)
-    assert contact is not None
-    _, off_mesh = sphere_scene.closest_points_in_world(contact[None])
+    assert contact is not None and contact.normal is not None
+    _, off_mesh = sphere_scene.closest_points_in_world(contact.point[None])
     # a tip radius ahead along the approach would lie r (1 - cos 12 deg) = 22 um off
     assert off_mesh[0] < 5e-6
+    # the sphere's normal there, not the approach's 12 degrees off
+    radial = (contact.point - centre) / np.linalg.norm(contact.point - centre)
+    assert np.degrees(np.arccos(np.clip(contact.normal @ radial, -1.0, 1.0))) < 2.0

@@ -1,0 +1,57 @@
+"""How a touch's sensed normal and a missed touch weigh a hypothesis against "none"."""
+
+import numpy as np
+import pytest
+
+from recognition import InvalidArgument
+from recognition.surfaces.noise_model import NoiseModel, huber
+from recognition.surfaces.touch_evidence import normal_evidence, sensed_normals
+
+SIGMA = np.deg2rad(2.0)
+UP = np.array([[0.0, 0.0, 1.0]])
+
+
+def _tilted(angle_rad: float) -> np.ndarray:
+    return np.array([[np.sin(angle_rad), 0.0, np.cos(angle_rad)]])
+
+
+@pytest.mark.parametrize("sigmas", [0.0, 1.0, 3.0, 8.0])
+def test_a_sensed_normal_scores_its_tilt_from_the_predicted_one_against_a_uniform_hemisphere(
+    sigmas,
+):
+    # N(0, s^2 I) in the tangent plane over 1 / (2 pi) per steradian: -huber(z) - log s^2
+    score = normal_evidence(UP, _tilted(sigmas * SIGMA), np.zeros((3, 3)), SIGMA, 3.0)
+    expected = -huber(np.array([sigmas]), 3.0)[0] - np.log(SIGMA**2)
+    assert score == pytest.approx(expected, rel=1e-9, abs=1e-9)
+
+
+def test_an_uncertain_turn_widens_what_the_normal_may_tilt():
+    # a turn about x or y of standard deviation tau tilts the normal z by as much
+    tau = np.deg2rad(3.0)
+    turn = np.diag([tau**2, tau**2, 1.0])  # a turn about z does not tilt it
+    score = normal_evidence(UP, _tilted(2 * SIGMA), turn, SIGMA, 3.0)
+    wide = SIGMA**2 + tau**2
+    assert score == pytest.approx(-0.5 * (2 * SIGMA) ** 2 / wide - np.log(wide), rel=1e-9)
+
+
+def test_no_sensed_normal_counts_nothing_and_an_opposite_one_counts_much():
+    assert normal_evidence(UP, np.full((1, 3), np.nan), np.zeros((3, 3)), SIGMA, 3.0) == 0.0
+    opposite = normal_evidence(UP, -UP, np.zeros((3, 3)), SIGMA, 3.0)
+    assert opposite == pytest.approx(-(3.0 * np.pi / SIGMA - 4.5) - np.log(SIGMA**2))
+
+
+def test_the_model_mismatch_adds_its_slope_to_the_sensors_normal_noise():
+    noise = NoiseModel(normal_sd_rad=0.03, model_mismatch_m=0.1e-3, correlation_m=5e-3)
+    assert noise.normal_sigma_rad() == pytest.approx(np.hypot(0.03, np.sqrt(3) * 0.1 / 5))
+
+
+def test_sensed_normals_are_made_unit_and_bad_ones_refused():
+    out = sensed_normals([[0.0, 0.0, 2.0], [np.nan] * 3], 2)
+    np.testing.assert_array_equal(out[0], [0.0, 0.0, 1.0])
+    assert np.all(np.isnan(out[1]))
+    assert np.all(np.isnan(sensed_normals(None, 3))) and sensed_normals(None, 3).shape == (3, 3)
+    for bad in ([[0.0, 0.0, 0.0]], [[np.nan, 0.0, 1.0]], [[np.inf, 0.0, 1.0]], [[0.0, 1.0]]):
+        with pytest.raises(InvalidArgument, match="normal"):
+            sensed_normals(bad, 1)
+    with pytest.raises(InvalidArgument, match="normal_sd_rad"):
+        NoiseModel(normal_sd_rad=0.0)
