@@ -31,6 +31,7 @@ __all__ = [
     "mesh_data_curves",
     "ray_contact",
     "sampling_plane_normals",
+    "sensed_normal",
 ]
 
 Array = NDArray[np.float64]
@@ -346,3 +347,30 @@ def ray_contact(
             raise InvalidCurveData("ray_contact with noise needs a random generator (rng)")
         point = point + rng.normal(0.0, noise_m, 3)
     return point
+
+
+def sensed_normal(
+    distance: MeshDistance,
+    T_model_from_data: ArrayLike,
+    point: ArrayLike,
+    *,
+    noise_rad: float = 0.0,
+    rng: np.random.Generator | None = None,
+) -> Array:
+    """The outward unit normal a sensor reports at a contact ``point`` (data frame) on a
+    known mesh at the pose ``T_model_from_data``: the normal of the face nearest it, in
+    the data frame, tilted by Gaussian noise of ``noise_rad`` per component across it
+    (drawn from ``rng``)."""
+    T = np.asarray(T_model_from_data, dtype=np.float64)
+    q = T[:3, :3] @ np.asarray(point, dtype=np.float64) + T[:3, 3]
+    _, _, face = distance.closest(q[None])
+    normal = T[:3, :3].T @ distance.normals_of(face)[0]
+    if noise_rad > 0:
+        if rng is None:
+            raise InvalidCurveData("sensed_normal with noise needs a random generator (rng)")
+        helper = np.eye(3)[int(np.argmin(np.abs(normal)))]
+        e1 = np.cross(normal, helper)
+        e1 /= np.linalg.norm(e1)
+        tilt = rng.normal(0.0, noise_rad, 2)
+        normal = normal + tilt[0] * e1 + tilt[1] * np.cross(normal, e1)
+    return np.asarray(normal / np.linalg.norm(normal), dtype=np.float64)

@@ -6,17 +6,19 @@ import hashlib
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import NDArray
 
 from recognition.errors import InvalidCurveData, RecognitionError
 from recognition.evaluation.instances import Instance, InstanceSpec
+from recognition.surfaces.active_touch import Contact
 from recognition.surfaces.database import ModelDatabase
+from recognition.surfaces.noise_model import NoiseModel
 from recognition.surfaces.touch_planning import TouchLimits, TouchPlan
 from recognition.synthetic import (
     SyntheticCurves,
     mesh_data_curves,
     ray_contact,
     sampling_plane_normals,
+    sensed_normal,
 )
 
 __all__ = ["SyntheticSource", "instance_specs", "make_curves"]
@@ -46,6 +48,11 @@ class SyntheticSource:
     separation_m : float
         Smallest distance between two instance vertices of one model.
     seed : int
+    normal_noise_rad : float or None
+        A verification touch also senses the surface normal, tilted by Gaussian noise of
+        this much per component (default: the simulated robot's,
+        :attr:`~recognition.surfaces.noise_model.NoiseModel.normal_sd_rad`); None: touches
+        sense no normal.
     """
 
     per_model: int = 10
@@ -55,6 +62,7 @@ class SyntheticSource:
     noise_std_m: float = 0.02e-3
     separation_m: float = 10e-3
     seed: int = 0
+    normal_noise_rad: float | None = NoiseModel.normal_sd_rad
 
     def __post_init__(self) -> None:
         # planes that coincide would make every instance invalid: say so once, here
@@ -79,13 +87,15 @@ class SyntheticSource:
         """The sampled curves (noisy, moved) and p on the model; a touch is a ray cast
         along the planned approach onto the true model at the true pose, with the same
         noise (:func:`~recognition.synthetic.ray_contact`), approaching within 80 degrees
-        of the curves' approach direction."""
+        of the curves' approach direction, and senses the normal there
+        (:func:`~recognition.synthetic.sensed_normal`, ``normal_noise_rad``)."""
         synthetic = make_curves(database, spec, self)
         model = database[spec.model]
         rng = _rng("touches", spec.key, spec.seed)
+        normal_rng = _rng("touch normals", spec.key, spec.seed)
 
-        def touch(plan: TouchPlan) -> NDArray[np.float64] | None:
-            return ray_contact(
+        def touch(plan: TouchPlan) -> Contact | None:
+            point = ray_contact(
                 model.distance,
                 synthetic.T_model_from_data,
                 plan.start,
@@ -94,6 +104,16 @@ class SyntheticSource:
                 noise_m=self.noise_std_m,
                 rng=rng,
             )
+            if point is None or self.normal_noise_rad is None:
+                return None if point is None else Contact(point)
+            normal = sensed_normal(
+                model.distance,
+                synthetic.T_model_from_data,
+                point,
+                noise_rad=self.normal_noise_rad,
+                rng=normal_rng,
+            )
+            return Contact(point, normal)
 
         assert synthetic.curves.approach is not None  # sampled curves carry it
         limits = TouchLimits(up=-synthetic.curves.approach, max_tilt_rad=np.deg2rad(80.0))

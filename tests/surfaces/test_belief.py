@@ -16,7 +16,7 @@ from recognition import (
 from recognition.surfaces.mesh_model import MeshModel
 from recognition.surfaces.noise_model import huber
 from recognition.surfaces.touch_planning import information_gain, predicted_depths
-from recognition.synthetic import mesh_data_curves, ray_contact
+from recognition.synthetic import mesh_data_curves, ray_contact, sensed_normal
 
 
 @pytest.fixture(scope="module")
@@ -236,6 +236,27 @@ def test_ray_contact_meets_the_mesh_where_the_ray_does(database):
     hit = ray_contact(model.distance, np.eye(4), [0.0, 0.0, 0.04], [0.0, 0.0, -1.0], 0.02)
     assert np.linalg.norm(hit) == pytest.approx(0.03, abs=0.02e-3)
     assert ray_contact(model.distance, np.eye(4), [0, 0, 0.04], [0, 0, 1.0], 0.02) is None
+
+
+def test_a_synthetic_touch_senses_the_meshs_normal_with_the_stated_noise(database):
+    model = database["sphere"]
+    T = np.eye(4)
+    T[:3, 3] = [0.01, 0.0, 0.0]  # data frame shifted from the model's
+    point = np.array([-0.01, 0.0, 0.03])  # the sphere's top in the data frame
+    exact = sensed_normal(model.distance, T, point)
+    assert np.degrees(np.arccos(exact @ [0.0, 0.0, 1.0])) < 2.0  # a facet of the test sphere
+    rng = np.random.default_rng(0)
+    sigma = np.deg2rad(2.0)
+    tilts = [
+        np.arccos(
+            np.clip(
+                sensed_normal(model.distance, T, point, noise_rad=sigma, rng=rng) @ exact, -1, 1
+            )
+        )
+        for _ in range(2000)
+    ]
+    # two components of sigma each: an RMS tilt of sigma sqrt(2)
+    assert np.sqrt(np.mean(np.square(tilts))) == pytest.approx(sigma * np.sqrt(2), rel=0.05)
 
 
 def test_bad_arguments_are_refused_with_typed_errors(database):
