@@ -26,14 +26,12 @@ curves' points (its whitened residuals counted by Huber's loss beyond ``huber_k`
 that none of them is right (:attr:`BeliefConfig.unexplained_p`: a search can miss the
 truth).
 
-A touch counts by how well h predicted it (:mod:`recognition.surfaces.touch_evidence`):
-its contact point given all the other contact (leave-one-out), against the uniform spread
-along the touch's approach that "none of these" predicts (:attr:`Belief.windows`), and its
-sensed normal, when the sensor gives one (:attr:`Belief.normals`), against the normal h
-predicts there, with the uncertainty of h's turn. A hypothesis that predicted the touch
-within its pose's uncertainty gains on "none"; one that had to move to meet it, or that
-tilts the surface there otherwise, loses, and when no hypothesis predicted the touches,
-"none of these" grows.
+A touch counts as h predicted it before it was made, at its pose then and with that
+pose's uncertainty (:mod:`recognition.surfaces.touch_evidence`; :attr:`Hypothesis.
+touch_evidence`): its contact point against the uniform spread along the approach that
+"none of these" predicts (:attr:`Belief.windows`), its sensed normal (:attr:`Belief.
+normals`) against a uniform hemisphere. When no hypothesis predicted the touches, "none
+of these" grows.
 
 Each hypothesis also carries the uncertainty of its pose (Laplace: the inverse of
 J^T Sigma^-1 J, J the point-to-plane Jacobian of the residuals, with a weak prior) and so
@@ -54,6 +52,7 @@ from scipy.special import gammaincinv
 
 from recognition.errors import InvalidArgument
 from recognition.rigid import cross, pose_matrix, rotation_from_vector
+from recognition.surfaces.belief_config import BeliefConfig
 from recognition.surfaces.closest_fit import refine_poses
 from recognition.surfaces.data_curves import DataCurves
 from recognition.surfaces.mesh_model import MeshModel
@@ -62,8 +61,7 @@ from recognition.surfaces.registration.ambiguity import distinct_poses
 from recognition.surfaces.registration.exact import smooth_normals
 from recognition.surfaces.touch_evidence import (
     miss_evidence,
-    normal_evidence,
-    point_evidence,
+    predicted_evidence,
     sensed_normals,
 )
 
@@ -94,73 +92,6 @@ def within_probability(offset: Array, covariance: Array, radius_m: float) -> flo
 
 
 @dataclass(frozen=True)
-class BeliefConfig:
-    """Which hypotheses a belief keeps and how it refines them.
-
-    Attributes
-    ----------
-    error_ratio, error_margin_m : float
-        A pose of a recognition becomes a hypothesis when its registration error (4.8) is
-        within ``error_ratio`` times the best plus ``error_margin_m``.
-    max_hypotheses : int
-        At most this many hypotheses (least error first).
-    refine_iterations : int
-        Levenberg-Marquardt steps on exact closest points per update.
-    refine_clip_m : float
-        In the refinement a residual counts at most this (metres): a touch far off a
-        slid pose pulls it back, a gross outlier does not pull.
-    min_posterior : float
-        Hypotheses whose posterior falls below this are dropped after an update.
-    unexplained_p : float
-        The alternative "none of these" is as likely as a hypothesis whose curves' whitened
-        residuals reach the (1 - ``unexplained_p``) quantile of their chi-square law: the
-        rate at which the true hypothesis is doubted. When the search missed the truth,
-        the curves fit no hypothesis that well, or touches that no hypothesis predicted
-        raise "none" (:attr:`touch_window_m`), and the confidence falls.
-    radius_m : float
-        An answer is right when it names the right model and puts p within this of the
-        truth (the confidence's sense), metres.
-    points_per_curve : int
-        Longer curves are scored on this many of their points, evenly spaced
-        (:func:`curve_points`): denser points add little once neighbours' mismatch
-        correlates, and every update solves with their covariance.
-    explore_hypotheses, explore_log_gap, explore_sd_m, explore_steps_m
-        The valleys of the most probable hypotheses whose p is uncertain by more than
-        ``explore_sd_m`` (standard deviation along its least determined direction)
-        explored at each update (:meth:`Belief._explored`). The threshold is low: on a
-        faceted mesh a fit of micrometre residuals has local minima a millimetre or two
-        apart along a shallow valley, each reporting a location uncertainty of a tenth of
-        a millimetre.
-    prior_rotation_rad, prior_translation_m : float
-        Standard deviations of the weak prior on each hypothesis's pose about its fit
-        (keeps the Laplace covariance finite where the data leave a motion free).
-    touch_window_m : float
-        Were none of the hypotheses right, a touch's contact could lie anywhere along its
-        approach: this long, metres, for a touch given without its approach's length
-        (:meth:`Belief.with_contacts`; the planner's default standoff plus travel,
-        :class:`~recognition.surfaces.touch_planning.TouchLimits`). A touch scores each
-        hypothesis by the density it predicted for the contact against this spread.
-    """
-
-    error_ratio: float = 3.0
-    error_margin_m: float = 0.02e-3
-    max_hypotheses: int = 24
-    refine_iterations: int = 4
-    refine_clip_m: float = 2.0e-3
-    min_posterior: float = 1e-9
-    unexplained_p: float = 1e-3
-    radius_m: float = 1.0e-3
-    points_per_curve: int = 41
-    explore_hypotheses: int = 3
-    explore_sd_m: float = 0.05e-3
-    explore_log_gap: float = 10.0
-    explore_steps_m: tuple[float, ...] = (2.0e-3, 4.0e-3, 7.0e-3)
-    prior_rotation_rad: float = 0.2
-    prior_translation_m: float = 0.01
-    touch_window_m: float = 10.0e-3
-
-
-@dataclass(frozen=True)
 class Hypothesis:
     """One answer: a model at a pose, with its fit and posterior.
 
@@ -174,8 +105,8 @@ class Hypothesis:
         Mean distance of all contact points from the model (4.8), outliers at the
         outlier level, metres.
     log_likelihood : float
-        Of all the contact (module docstring): the clipped residuals whitened by Sigma,
-        each counted by Huber's loss, the touches' normals and misses
+        Of all the contact (module docstring): the curves' clipped residuals whitened by
+        Sigma, each counted by Huber's loss, ``touch_evidence`` and the misses
         (:mod:`~recognition.surfaces.touch_evidence`); up to a constant.
     posterior : float
     outliers : (k,) int
@@ -192,6 +123,9 @@ class Hypothesis:
         ``location`` and its images under the model's symmetries
         (:attr:`MeshModel.symmetries`): answers that are the same up to a symmetry of
         the object.
+    touch_evidence : float
+        Log ratio against "none of these" of the touches' contacts, each as this
+        hypothesis (or the pose it was refined from) predicted it before it was made.
     """
 
     model: str
@@ -205,6 +139,7 @@ class Hypothesis:
     pose_covariance: Array = field(default_factory=lambda: np.zeros((6, 6)))
     location_covariance: Array = field(default_factory=lambda: np.zeros((3, 3)))
     location_images: Array = field(default_factory=lambda: np.zeros((0, 3)))
+    touch_evidence: float = 0.0
 
     def nearest_location(self, point: Array) -> Array:
         """Of ``location`` and its symmetric images, the one nearest ``point`` (3,)."""
@@ -328,7 +263,7 @@ class Belief:
         limit = config.error_ratio * best + config.error_margin_m
         kept = sorted((c for c in usable if c[2] <= limit), key=lambda c: c[2])
         kept = kept[: config.max_hypotheses]
-        return belief._rescored([(n, np.asarray(T, float)) for n, T, _ in kept], models)
+        return belief._rescored([(n, np.asarray(T, float), 0.0) for n, T, _ in kept], models)
 
     def with_contacts(
         self,
@@ -368,29 +303,54 @@ class Belief:
             windows=np.concatenate([self.windows, lengths]),
             normals=np.concatenate([self.normals, sensed]),
         )
-        return belief._rescored([(h.model, h.T_model_from_data) for h in self.hypotheses], models)
+        whitening = belief._whitening()
+        scores = belief._predicted(self.hypotheses, models, whitening, len(self.windows))
+        return belief._rescored(
+            [
+                (h.model, h.T_model_from_data, h.touch_evidence + score)
+                for h, score in zip(self.hypotheses, scores, strict=True)
+            ],
+            models,
+            whitening,
+        )
 
     def with_poses(
         self, models: Mapping[str, MeshModel], poses: Sequence[tuple[str, Array]]
     ) -> Belief:
         """The belief with further candidate poses ``(model, T_model_from_data)`` (a
         broader search's), refined and scored with its hypotheses on all the contact;
-        marked ``broadened``."""
-        known = [(h.model, h.T_model_from_data) for h in self.hypotheses]
-        usable = [(n, np.asarray(T, float)) for n, T in poses if n in models]
+        marked ``broadened``. A new pose's touches count as it predicted them refined on
+        the curves alone."""
+        known = [(h.model, h.T_model_from_data, h.touch_evidence) for h in self.hypotheses]
+        usable = [(n, np.asarray(T, float), 0.0) for n, T in poses if n in models]
+        if usable and len(self.windows):
+            curves = replace(
+                self,
+                points=self.points[: self.n_curve_points],
+                misses=(),
+                windows=np.zeros(0),
+                normals=np.zeros((0, 3)),
+            )
+            fitted = curves._fitted(usable, models, curves._whitening())
+            scores = self._predicted(fitted, models, self._whitening(), 0)
+            usable = [
+                (h.model, h.T_model_from_data, score)
+                for h, score in zip(fitted, scores, strict=True)
+            ]
         return replace(self._rescored([*known, *usable], models), broadened=True)
 
     def _rescored(
-        self, hypotheses: Sequence[tuple[str, Array]], models: Mapping[str, MeshModel]
+        self,
+        hypotheses: Sequence[tuple[str, Array, float]],
+        models: Mapping[str, MeshModel],
+        whitening: Array | None = None,
     ) -> Belief:
-        """This belief with ``hypotheses`` (model, T_model_from_data) refined on all the
-        points, the valleys of the most probable explored (:meth:`_explored`),
-        near-duplicates merged, scored and normalised."""
+        """This belief with ``hypotheses`` (model, T_model_from_data, touch evidence)
+        refined on all the points, the valleys of the most probable explored
+        (:meth:`_explored`), near-duplicates merged, scored and normalised;
+        ``whitening``: :meth:`_whitening`, when already computed."""
         config = self.config
-        lower = np.linalg.cholesky(self.noise.covariance(self.points, self.sensor_m))
-        whitening, info = lapack.dtrtri(lower, lower=1)  # the triangular inverse
-        if info != 0:
-            raise InvalidArgument(f"the residuals' covariance is singular (LAPACK info {info})")
+        whitening = self._whitening() if whitening is None else whitening
         found = self._fitted(hypotheses, models, whitening)
         if not found:
             return self
@@ -399,7 +359,7 @@ class Belief:
         logs = np.array([h.log_likelihood for h in found])
         # "none of these": as likely as a fit whose curves' whitened residuals sit at the
         # (1 - unexplained_p) quantile of their chi-square law (n - 6 degrees of freedom);
-        # the touches score each hypothesis against what "none" predicts (_evidence)
+        # the touches score each hypothesis against what "none" predicts (_predicted)
         dof = max(self.n_curve_points - 6, 1)
         other = -float(gammaincinv(dof / 2.0, 1.0 - config.unexplained_p))
         top = max(float(logs.max()), other)
@@ -415,23 +375,31 @@ class Belief:
         )
         return replace(self, hypotheses=kept, unexplained=unexplained)
 
+    def _whitening(self) -> Array:
+        """The inverse of the lower Cholesky factor of Sigma over :attr:`points`."""
+        lower = np.linalg.cholesky(self.noise.covariance(self.points, self.sensor_m))
+        whitening, info = lapack.dtrtri(lower, lower=1)  # the triangular inverse
+        if info != 0:
+            raise InvalidArgument(f"the residuals' covariance is singular (LAPACK info {info})")
+        return np.asarray(whitening)
+
     def _fitted(
         self,
-        hypotheses: Sequence[tuple[str, Array]],
+        hypotheses: Sequence[tuple[str, Array, float]],
         models: Mapping[str, MeshModel],
         whitening: Array,
     ) -> list[Hypothesis]:
-        """``hypotheses`` (model, T_model_from_data) refined on all the points and scored
-        (posterior 0: not normalised); ``whitening``: the inverse of Sigma's lower
-        Cholesky factor."""
+        """``hypotheses`` (model, T_model_from_data, touch evidence) refined on all the
+        points and scored (posterior 0: not normalised); ``whitening``:
+        :meth:`_whitening`."""
         level = self.noise.outlier_level_m(self.sensor_m)
         found: list[Hypothesis] = []
-        by_model: dict[str, list[Array]] = {}
-        for name, T in hypotheses:
-            by_model.setdefault(name, []).append(T)
-        for name, poses in by_model.items():
+        by_model: dict[str, list[tuple[Array, float]]] = {}
+        for name, T, evidence in hypotheses:
+            by_model.setdefault(name, []).append((T, evidence))
+        for name, entries in by_model.items():
             model = models[name]
-            T = np.asarray(poses)
+            T = np.asarray([pose for pose, _ in entries])
             R, t, _ = refine_poses(
                 model.distance,
                 self.points,
@@ -453,17 +421,12 @@ class Belief:
                 location = R[k] @ self.point + t[k]
                 rows = slice(k * len(self.points), (k + 1) * len(self.points))
                 smooth = smooth_normals(model, closest[rows], face[rows])
-                pivot, pose_cov, location_cov, leverage = self._laplace(
+                pivot, pose_cov, location_cov = self._laplace(
                     moved[k], smooth, np.abs(signed[k]) <= level, location, whitening
                 )
-                log_likelihood = self._evidence(whitening @ r, leverage, whitening)
-                log_likelihood += normal_evidence(
-                    smooth[self.n_curve_points :],
-                    self.normals @ R[k].T,
-                    pose_cov[:3, :3],
-                    self.noise.normal_sigma_rad(),
-                    self.noise.huber_k,
-                )
+                evidence = entries[k][1]
+                whitened = whitening[: self.n_curve_points] @ r
+                log_likelihood = evidence - float(np.sum(huber(whitened, self.noise.huber_k)))
                 log_likelihood += miss_evidence(
                     model.distance,
                     R[k],
@@ -487,21 +450,23 @@ class Belief:
                         np.vstack(
                             [location, symmetries[:, :3, :3] @ location + symmetries[:, :3, 3]]
                         ),
+                        evidence,
                     )
                 )
         return found
 
-    def _explored(self, found: Sequence[Hypothesis]) -> list[tuple[str, Array]]:
+    def _explored(self, found: Sequence[Hypothesis]) -> list[tuple[str, Array, float]]:
         """Starts along the valleys of the most probable hypotheses: where the data leave
         a pose nearly free (a slide along a nearly symmetric surface), a model's mismatch
         makes several minima along it, far beyond what the Laplace covariance sees. Each
         of the ``explore_hypotheses`` most likely (within ``explore_log_gap`` of the best)
         is moved along its two least determined motions (the rotation scaled by the
-        data's reach) by each of ``explore_steps_m`` either way."""
+        data's reach) by each of ``explore_steps_m`` either way; each start keeps the
+        touch evidence of the hypothesis it came from (the same valley)."""
         config = self.config
         best = max(h.log_likelihood for h in found)
         top = sorted(found, key=lambda h: -h.log_likelihood)[: config.explore_hypotheses]
-        starts: list[tuple[str, Array]] = []
+        starts: list[tuple[str, Array, float]] = []
         for h in top:
             if h.log_likelihood < best - config.explore_log_gap:
                 continue
@@ -510,8 +475,8 @@ class Belief:
             for _, direction in self.loose_motions(h):
                 for step in config.explore_steps_m:
                     starts += [
-                        (h.model, h.moved(step * direction)),
-                        (h.model, h.moved(-step * direction)),
+                        (h.model, h.moved(step * direction), h.touch_evidence),
+                        (h.model, h.moved(-step * direction), h.touch_evidence),
                     ]
         return starts
 
@@ -533,12 +498,11 @@ class Belief:
         inliers: NDArray[np.bool_],
         location: Array,
         whitening: Array,
-    ) -> tuple[Array, Array, Array, Array]:
-        """The pivot, pose covariance (6, 6), location covariance (3, 3) and each touch's
-        leverage (k,) of a fit: the covariance is the inverse of J^T Sigma^-1 J plus the
-        weak prior, J (n, 6) the residuals' change under a turn about the pivot and a
-        shift (outliers do not inform); the leverages are the touches' diagonal of the
-        whitened hat matrix Jw C Jw^T, Jw = Sigma^-1/2 J."""
+    ) -> tuple[Array, Array, Array]:
+        """The pivot, pose covariance (6, 6) and location covariance (3, 3) of a fit: the
+        covariance is the inverse of J^T Sigma^-1 J plus the weak prior, J (n, 6) the
+        residuals' change under a turn about the pivot and a shift (outliers do not
+        inform)."""
         pivot = moved[inliers].mean(axis=0) if inliers.any() else moved.mean(axis=0)
         J = np.concatenate([cross(moved - pivot, normals), normals], axis=1)
         J[~inliers] = 0.0
@@ -553,21 +517,35 @@ class Belief:
         arm = location - pivot
         skew = np.array([[0, -arm[2], arm[1]], [arm[2], 0, -arm[0]], [-arm[1], arm[0], 0]])
         Jp = np.concatenate([-skew, np.eye(3)], axis=1)  # d location / d (turn, shift)
-        touches = Jw[self.n_curve_points :]
-        leverage = np.einsum("ij,jk,ik->i", touches, pose, touches)
-        return pivot, pose, Jp @ pose @ Jp.T, leverage
+        return pivot, pose, Jp @ pose @ Jp.T
 
-    def _evidence(self, whitened: Array, leverage: Array, whitening: Array) -> float:
-        """Log-likelihood of the contact points under a hypothesis, up to a constant shared
-        with "none of these" (module docstring): the curves' whitened residuals counted by
-        Huber's loss; each touch (``leverage``: the touches' h_ii) by
-        :func:`~recognition.surfaces.touch_evidence.point_evidence`."""
-        n = self.n_curve_points
-        k = self.noise.huber_k
-        spread = 1.0 / np.diag(whitening)[n:]  # L_ii: each touch's conditional noise
-        return -float(np.sum(huber(whitened[:n], k))) + point_evidence(
-            whitened[n:], leverage, spread, self.windows, k
-        )
+    def _predicted(
+        self,
+        hypotheses: Sequence[Hypothesis],
+        models: Mapping[str, MeshModel],
+        whitening: Array,
+        first: int,
+    ) -> list[float]:
+        """Each hypothesis's log ratio against "none of these" of the touches from the
+        ``first`` on, as it predicted them at its pose (module docstring;
+        :func:`~recognition.surfaces.touch_evidence.predicted_evidence`);
+        ``whitening``: :meth:`_whitening` of all the points."""
+        rows = whitening[self.n_curve_points + first :]
+        return [
+            predicted_evidence(
+                models[h.model],
+                h.T_model_from_data,
+                h.pivot,
+                h.pose_covariance,
+                self.points,
+                rows,
+                self.windows[first:],
+                self.normals[first:],
+                self.noise,
+                self.sensor_m,
+            )
+            for h in hypotheses
+        ]
 
 
 def _merged(found: Sequence[Hypothesis], point: Array) -> list[Hypothesis]:

@@ -1,13 +1,18 @@
 """How a verification touch weighs a hypothesis against "none of these" (log ratios, nats).
 
-A touch's contact point (:func:`point_evidence`): by how well the hypothesis predicted it,
-its residual given all the other contact (leave-one-out: a pose refitted to the touch
-would otherwise explain any touch at all). Whitened residual z_i over sqrt(1 - h_ii),
-h_ii the touch's leverage on the pose fit; density N(0, L_ii^2 / (1 - h_ii)), L_ii its
-conditional noise; against the uniform spread along the touch's approach (length w_i)
-that "none of these" predicts:
+Each touch counts as the hypothesis predicted it before it was made
+(:func:`predicted_evidence`): at its pose then, with the uncertainty of that pose. Scored
+after a refit to all the contact instead, a hypothesis that slid along a shallow valley
+to meet a touch it had missed by millimetres would lose little (the leave-one-out
+leverage linearises at the refitted pose).
 
-    log [N(z_i / sqrt(1 - h_ii)) / (L_ii sqrt(1 - h_ii)^-1)] - log (1 / w_i).
+The contact point (:func:`point_evidence`): its residual whitened given all the contact
+before it, z_i (Sigma's Cholesky factor L; L_ii its conditional noise), spread wider by
+q_i = g_i^T C g_i, g_i the whitened residual's change under a small motion of the pose
+and C that motion's Laplace covariance; against the uniform spread along the touch's
+approach (length w_i) that "none of these" predicts:
+
+    log [N(z_i / sqrt(1 + q_i)) / (L_ii sqrt(1 + q_i))] - log (1 / w_i).
 
 A sensed contact normal n_s (:func:`normal_evidence`): against the normal n the
 hypothesis predicts where it puts the contact. Its deviation d = theta B u (theta the
@@ -38,27 +43,37 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from recognition.errors import InvalidArgument
+from recognition.rigid import cross
 from recognition.surfaces.distance import MeshDistance
-from recognition.surfaces.noise_model import huber
+from recognition.surfaces.mesh_model import MeshModel
+from recognition.surfaces.noise_model import NoiseModel, huber
+from recognition.surfaces.registration.exact import smooth_normals
 
-__all__ = ["miss_evidence", "normal_evidence", "point_evidence", "sensed_normals"]
+__all__ = [
+    "miss_evidence",
+    "normal_evidence",
+    "point_evidence",
+    "predicted_evidence",
+    "sensed_normals",
+]
 
 Array = NDArray[np.float64]
 
 
 def point_evidence(
-    whitened: Array, leverage: Array, spread: Array, windows: Array, huber_k: float
+    whitened: Array, pose_variance: Array, spread: Array, windows: Array, huber_k: float
 ) -> float:
     """Log ratio of the touches' contact points (module docstring): ``whitened`` (k,) the
-    touches' whitened residuals z_i, ``leverage`` (k,) h_ii, ``spread`` (k,) L_ii and
-    ``windows`` (k,) the approaches' lengths w_i (metres)."""
+    touches' whitened residuals z_i at the predicting pose, ``pose_variance`` (k,) q_i
+    the variance its uncertainty adds to them, ``spread`` (k,) L_ii and ``windows`` (k,)
+    the approaches' lengths w_i (metres)."""
     if len(whitened) == 0:
         return 0.0
-    keep = np.clip(1.0 - leverage, 1e-12, 1.0)
+    wide = 1.0 + np.maximum(pose_variance, 0.0)
     return float(
         np.sum(
-            -huber(whitened / np.sqrt(keep), huber_k)
-            + 0.5 * np.log(keep)
+            -huber(whitened / np.sqrt(wide), huber_k)
+            - 0.5 * np.log(wide)
             - np.log(np.sqrt(2.0 * np.pi) * spread / windows)
         )
     )
@@ -89,6 +104,55 @@ def normal_evidence(
         z = float(np.sqrt(d @ np.linalg.solve(C, d)))
         total += -float(huber(np.array([z]), huber_k)[0]) - 0.5 * float(np.log(np.linalg.det(C)))
     return total
+
+
+def predicted_evidence(
+    model: MeshModel,
+    T_model_from_data: Array,
+    pivot: Array,
+    pose_covariance: Array,
+    points: Array,
+    whitening_rows: Array,
+    windows: Array,
+    normals: Array,
+    noise: NoiseModel,
+    sensor_m: float,
+) -> float:
+    """Log ratio against "none of these" of the last k of the contact ``points`` (n, 3),
+    the touches, as a hypothesis predicted them before they were made (module
+    docstring): ``model`` at ``T_model_from_data`` with the Laplace covariance
+    ``pose_covariance`` of a turn about ``pivot`` and a shift (model frame);
+    ``whitening_rows`` (k, n) the touches' rows of the inverse Cholesky factor of Sigma
+    over all the points; ``windows`` (k,) the approaches' lengths and ``normals`` (k, 3)
+    the sensed normals (rows of NaN: none), data frame; ``noise`` and ``sensor_m`` as the
+    belief's."""
+    k = len(whitening_rows)
+    if k == 0:
+        return 0.0
+    R, t = T_model_from_data[:3, :3], T_model_from_data[:3, 3]
+    moved = points @ R.T + t
+    signed, closest, face = model.distance.signed_closest(moved)
+    surface = smooth_normals(model, closest, face)
+    # the contact before the touches counts at most the outlier level, as in the fit;
+    # the touches as they are (a miss by millimetres is no outlier of the sensor)
+    level = noise.outlier_level_m(sensor_m)
+    residuals = np.concatenate([np.clip(signed[:-k], -level, level), signed[-k:]])
+    J = whitening_rows @ np.concatenate([cross(moved - pivot, surface), surface], axis=1)
+    spread = 1.0 / whitening_rows[np.arange(k), len(points) - k + np.arange(k)]
+    score = point_evidence(
+        whitening_rows @ residuals,
+        np.einsum("ij,jk,ik->i", J, pose_covariance, J),
+        spread,
+        windows,
+        noise.huber_k,
+    )
+    return score + normal_evidence(
+        surface[len(points) - k :],
+        normals @ R.T,
+        pose_covariance[:3, :3],
+        noise.normal_sigma_rad(),
+        noise.huber_k,
+    )
 
 
 def miss_evidence(

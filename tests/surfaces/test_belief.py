@@ -15,6 +15,7 @@ from recognition import (
 )
 from recognition.surfaces.mesh_model import MeshModel
 from recognition.surfaces.noise_model import huber
+from recognition.surfaces.registration.exact import smooth_normals
 from recognition.surfaces.touch_planning import information_gain, predicted_depths
 from recognition.synthetic import mesh_data_curves, ray_contact, sensed_normal
 
@@ -108,7 +109,9 @@ def test_touches_tell_two_similar_models_apart(database):
 def test_a_touch_counts_by_the_density_its_hypothesis_predicted_for_it(database, off_m):
     # a touch 8 mm from p, on the blob or 15 um outside it, under a well-determined pose:
     # it moves the hypothesis against "none of these" (uniform along the approach) by
-    # log(window / (sqrt(2 pi) s)) - (off / s)^2 / 2, s the touch's noise given the curves
+    # log(window / (sqrt(2 pi) s)) - z^2 / (2 (1 + q)) - log(1 + q) / 2, z = (r - mu) / s,
+    # r the touch's residual at the pose before the touch, mu and s its mean and spread
+    # given the curves' residuals, q the variance the pose's uncertainty adds to z
     model = database["blob"]
     synthetic = _curves(model, 2500, seed=1, noise=0.005e-3)
     before = database.recognize(synthetic.curves, models=["blob"]).belief
@@ -118,11 +121,27 @@ def test_a_touch_counts_by_the_density_its_hypothesis_predicted_for_it(database,
     touched = model.vertices[v] + off_m * model.normals[v]
     touched = data_from_model[:3, :3] @ touched + data_from_model[:3, 3]
     after = database.update(before, touched[None])
-    sigma = before.noise.covariance(np.vstack([before.points, touched]), before.sensor_m)
+    points = np.vstack([before.points, touched])
+    T = before.best.T_model_from_data
+    r = model.distance.signed(points @ T[:3, :3].T + T[:3, 3])
+    sigma = before.noise.covariance(points, before.sensor_m)
     n = len(before.points)
+    mu = sigma[n, :n] @ np.linalg.solve(sigma[:n, :n], r[:n])
     s = np.sqrt(sigma[n, n] - sigma[n, :n] @ np.linalg.solve(sigma[:n, :n], sigma[:n, n]))
+    h = before.best
+    weights = -np.linalg.solve(sigma[:n, :n], sigma[:n, n])  # z = (r_n + weights . r_o) / s
+    moved = points @ T[:3, :3].T + T[:3, 3]
+    _, near, faces = model.distance.closest(moved)
+    normals = smooth_normals(model, near, faces)
+    J = np.concatenate([np.cross(moved - h.pivot, normals), normals], axis=1)
+    g = (J[n] + weights @ J[:n]) / s
+    q = g @ h.pose_covariance @ g
+    z = (r[n] - mu) / s
     expected = np.log(BeliefConfig().touch_window_m / (np.sqrt(2 * np.pi) * s))
-    expected -= 0.5 * (off_m / s) ** 2
+    expected -= 0.5 * z**2 / (1 + q) + 0.5 * np.log(1 + q)
+    assert after.best.touch_evidence == pytest.approx(expected, abs=0.02)
+    assert abs(r[n] - off_m) < 2e-6  # the pose predicted the surface there
+    # the refit to the touch moves the curves' own fit little
     gain = after.best.log_likelihood - before.best.log_likelihood
     assert gain == pytest.approx(expected, abs=0.5)
     # an approach twice as long made the contact half as likely under "none of these"
