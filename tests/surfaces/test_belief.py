@@ -105,6 +105,17 @@ def test_touches_tell_two_similar_models_apart(database):
     assert np.linalg.norm(images - synthetic.point_in_model, axis=1).min() < 1e-3
 
 
+def _blob_and_a_vertex_8_mm_from_p(database):
+    """The blob, its belief after well-determined curves, a vertex 8 mm from their p and
+    the transform of the model frame into the data frame."""
+    model = database["blob"]
+    synthetic = _curves(model, 2500, seed=1, noise=0.005e-3)
+    before = database.recognize(synthetic.curves, models=["blob"]).belief
+    p = synthetic.point_in_model
+    v = int(np.argmin(np.abs(np.linalg.norm(model.vertices - p, axis=1) - 8e-3)))
+    return model, before, v, np.linalg.inv(synthetic.T_model_from_data)
+
+
 @pytest.mark.parametrize("off_m", [0.0, 0.015e-3])
 def test_a_touch_counts_by_the_density_its_hypothesis_predicted_for_it(database, off_m):
     # a touch 8 mm from p, on the blob or 15 um outside it, under a well-determined pose:
@@ -112,12 +123,7 @@ def test_a_touch_counts_by_the_density_its_hypothesis_predicted_for_it(database,
     # log(window / (sqrt(2 pi) s)) - z^2 / (2 (1 + q)) - log(1 + q) / 2, z = (r - mu) / s,
     # r the touch's residual at the pose before the touch, mu and s its mean and spread
     # given the curves' residuals, q the variance the pose's uncertainty adds to z
-    model = database["blob"]
-    synthetic = _curves(model, 2500, seed=1, noise=0.005e-3)
-    before = database.recognize(synthetic.curves, models=["blob"]).belief
-    p = synthetic.point_in_model
-    v = int(np.argmin(np.abs(np.linalg.norm(model.vertices - p, axis=1) - 8e-3)))
-    data_from_model = np.linalg.inv(synthetic.T_model_from_data)
+    model, before, v, data_from_model = _blob_and_a_vertex_8_mm_from_p(database)
     touched = model.vertices[v] + off_m * model.normals[v]
     touched = data_from_model[:3, :3] @ touched + data_from_model[:3, 3]
     after = database.update(before, touched[None])
@@ -153,12 +159,7 @@ def test_a_touch_counts_by_the_density_its_hypothesis_predicted_for_it(database,
 def test_a_touchs_sensed_normal_counts_by_how_far_it_tilts_from_the_hypothesis(database, tilt_deg):
     # the same touch with the blob's own normal there gains -log s_n^2 on the touch
     # without one; tilted 15 degrees (7.5 s_n) it loses Huber's loss of the tilt on that
-    model = database["blob"]
-    synthetic = _curves(model, 2500, seed=1, noise=0.005e-3)
-    before = database.recognize(synthetic.curves, models=["blob"]).belief
-    p = synthetic.point_in_model
-    v = int(np.argmin(np.abs(np.linalg.norm(model.vertices - p, axis=1) - 8e-3)))
-    data_from_model = np.linalg.inv(synthetic.T_model_from_data)
+    model, before, v, data_from_model = _blob_and_a_vertex_8_mm_from_p(database)
     touched = data_from_model[:3, :3] @ model.vertices[v] + data_from_model[:3, 3]
     normal = model.normals[v]
     side = np.cross(normal, [1.0, 0.0, 0.0])
