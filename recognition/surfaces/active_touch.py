@@ -5,8 +5,9 @@ information gain (:func:`~recognition.surfaces.touch_planning.plan_touch`), make
 (``touch``: the robot, or a ray cast on a known surface in a benchmark; its contact point,
 with the surface normal when the sensor gives one), refine and re-score every hypothesis
 with all the contact (:meth:`Belief.with_contacts`); when no
-hypothesis explains the contact any more, the curves are searched again more broadly
-(once, :meth:`~recognition.surfaces.database.ModelDatabase.broaden`). It stops once the
+hypothesis explains the contact any more, the curves and the touches' contact points are
+searched again more broadly (:meth:`~recognition.surfaces.database.ModelDatabase.broaden`,
+at most once per touch). It stops once the
 belief's confidence (:attr:`Belief.confidence`) reaches ``confidence``, the touches are
 spent, or no allowed touch can tell the hypotheses apart. A belief that is sure after the
 curves makes no touch.
@@ -30,7 +31,7 @@ __all__ = ["BROADEN_AT", "Contact", "TouchStep", "Verification", "verify"]
 
 Array = NDArray[np.float64]
 
-#: When "none of these" is at least this probable, the search is broadened once
+#: When "none of these" is at least this probable, the search is broadened
 #: (:meth:`~recognition.surfaces.database.ModelDatabase.broaden`) before the next touch.
 BROADEN_AT = 0.5
 
@@ -94,7 +95,7 @@ class Verification:
     stop : str
         Why the loop ended: ``"sure"``, ``"touches spent"`` or ``"no informative touch"``.
     broaden_s : float
-        Time of the broader search (:meth:`ModelDatabase.broaden`) when one ran, seconds
+        Time of the broader searches (:meth:`ModelDatabase.broaden`), seconds
         (also in the recognition time of the touch it preceded).
     """
 
@@ -149,9 +150,9 @@ def verify(
         if k == max_touches:
             break
         start = time.perf_counter()
-        if belief.unexplained >= BROADEN_AT and not belief.broadened:
+        if belief.unexplained >= BROADEN_AT and belief.broadened != len(belief.windows):
             belief = database.broaden(belief)
-            broaden_s = time.perf_counter() - start
+            broaden_s += time.perf_counter() - start
             if belief.confidence >= confidence:
                 stop = "sure"
                 break

@@ -187,8 +187,9 @@ class Belief:
         Posterior that none of the hypotheses is the truth (module docstring).
     curves : DataCurves or None
         The curves the belief started from (a broader search can start again from them).
-    broadened : bool
-        Whether a broader search has added its poses (:meth:`with_poses`).
+    broadened : int or None
+        How many touches' contact points the last broader search that added its poses
+        (:meth:`with_poses`) had (None: none has).
     """
 
     hypotheses: tuple[Hypothesis, ...]
@@ -203,7 +204,7 @@ class Belief:
     normals: Array = field(default_factory=lambda: np.zeros((0, 3)))
     unexplained: float = 0.0
     curves: DataCurves | None = field(default=None, repr=False)
-    broadened: bool = False
+    broadened: int | None = None
 
     @property
     def best(self) -> Hypothesis | None:
@@ -319,8 +320,8 @@ class Belief:
     ) -> Belief:
         """The belief with further candidate poses ``(model, T_model_from_data)`` (a
         broader search's), refined and scored with its hypotheses on all the contact;
-        marked ``broadened``. A new pose's touches count as it predicted them refined on
-        the curves alone."""
+        marked ``broadened`` with the touches it had. A new pose's touches count as it
+        predicted them refined on the curves alone."""
         known = [(h.model, h.T_model_from_data, h.touch_evidence) for h in self.hypotheses]
         usable = [(n, np.asarray(T, float), 0.0) for n, T in poses if n in models]
         if usable and len(self.windows):
@@ -337,7 +338,7 @@ class Belief:
                 (h.model, h.T_model_from_data, score)
                 for h, score in zip(fitted, scores, strict=True)
             ]
-        return replace(self._rescored([*known, *usable], models), broadened=True)
+        return replace(self._rescored([*known, *usable], models), broadened=len(self.windows))
 
     def _rescored(
         self,

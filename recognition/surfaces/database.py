@@ -268,11 +268,12 @@ class ModelDatabase:
         return belief.with_contacts(self.models, points, misses, windows, normals)
 
     def broaden(self, belief: Belief) -> Belief:
-        """``belief`` with the poses of a broader search of its curves added (the fast
+        """``belief`` with the poses of a broader search of its contact added (the fast
         mode's first fallback pass: candidates over every model's whole surface, more
-        poses kept), once: for when no hypothesis explains the contact
-        (:attr:`Belief.unexplained`). Unchanged without curves, or once broadened."""
-        if belief.curves is None or belief.broadened:
+        poses kept; the touches' contact points choose the poses with the curves): for
+        when no hypothesis explains the contact (:attr:`Belief.unexplained`). Unchanged
+        without curves, or when a broader search has already had all its touches."""
+        if belief.curves is None or belief.broadened == len(belief.windows):
             return belief
         config = self.registration if isinstance(self.registration, FastConfig) else FastConfig()
         wide = replace(config, search=ALIGNED_SEARCH, fallbacks=())
@@ -285,6 +286,7 @@ class ModelDatabase:
             stack=self.field_stack,
             which_field=np.arange(len(self)),
             index=self.candidate_index,
+            contact=belief.points[belief.n_curve_points :],
         )
         poses = [(r.model, T) for r in found if not r.rejected for T in r.poses]
         return belief.with_poses(self.models, poses)

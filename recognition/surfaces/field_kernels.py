@@ -158,7 +158,7 @@ def rigid_normal_equations(
     """J^T J (B, 6, 6) and J^T r (B, 6) of residuals r (B, P) at points X (B, P, 3) with
     gradients g (B, P, 3) under a small rigid motion (rotation vector about the centroid
     of each pose's points, then translation): row i of J is ((x_i - c) x g_i, g_i). A
-    residual beyond its pose's ``clip`` (B,) is left out (a truncated quadratic)."""
+    residual beyond its ``clip`` (B, P) is left out (a truncated quadratic)."""
     B, P = r.shape
     H = np.zeros((B, 6, 6))
     b = np.zeros((B, 6))
@@ -171,7 +171,7 @@ def rigid_normal_equations(
             c2 += X[k, i, 2]
         c0, c1, c2 = c0 / P, c1 / P, c2 / P
         for i in range(P):
-            if not abs(r[k, i]) <= clip[k]:
+            if not abs(r[k, i]) <= clip[k, i]:
                 continue  # beyond the clip: no pull
             d0, d1, d2 = X[k, i, 0] - c0, X[k, i, 1] - c1, X[k, i, 2] - c2
             n0, n1, n2 = g[k, i, 0], g[k, i, 1], g[k, i, 2]

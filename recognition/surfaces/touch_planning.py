@@ -12,7 +12,10 @@ Bhattacharyya bound (Kolchinsky and Tracey 2017):
     I >= -sum_i w_i log sum_j w_j exp(-(d_i - d_j)^2 / (8 sigma^2)),
 
 exact when the predictions are far apart or equal; a miss counts as an outcome far from
-every contact. The touch of greatest bound is chosen. Touches the stylus cannot make (a
+every contact. The weights are the hypotheses' posteriors relative to their total, and
+"none of these" (:attr:`Belief.unexplained`, counted at most ``MAX_NONE_WEIGHT``) is one
+more outcome, a contact anywhere along the approach: a touch tests the hypotheses
+against it even where they agree. The touch of greatest bound is chosen. Touches the stylus cannot make (a
 surface tilted beyond ``max_tilt_rad`` from ``up``), below ``min_height_m`` (the table),
 too close to contact already made, occluded on the best hypothesis or refused by the
 caller's ``reachable`` are never candidates.
@@ -43,8 +46,16 @@ THICKNESS_M = 4.0e-3
 #: Touches that outcomes this likely (relative to the likeliest) predict to miss are not
 #: made.
 LIKELY_WEIGHT = 0.05
-#: Hypotheses less probable than this are left out of a touch's outcomes.
+#: Hypotheses less probable than this (of the hypotheses' total) are left out of a
+#: touch's outcomes.
 MIN_OUTCOME_WEIGHT = 1e-4
+#: Hypotheses at least this probable (of the hypotheses' total) also show their pose's
+#: uncertainty among the outcomes.
+SPREAD_WEIGHT = 1e-3
+#: "None of these" counts among a touch's outcomes at most this probable: beyond, the
+#: touch serves the broader search its contact point joins, and still splits the
+#: hypotheses.
+MAX_NONE_WEIGHT = 0.5
 #: A pose uncertain by more than this along a motion (metres at the data's reach) is
 #: also represented by poses moved along it ...
 SIGMA_FLOOR_M = 0.1e-3
@@ -181,14 +192,35 @@ def predicted_depths(
     return out
 
 
-def information_gain(depths: Array, weights: Array, sigma_m: float) -> Array:
+def information_gain(
+    depths: Array,
+    weights: Array,
+    sigma_m: float,
+    none_weight: float = 0.0,
+    window_m: float = 0.0,
+) -> Array:
     """Lower bound of the expected information gain (nats) of each touch (module
     docstring): ``depths`` (H, C) predicted per hypothesis (NaN: a miss), ``weights``
-    (H,) posteriors, ``sigma_m`` the touch's noise."""
+    (H,) posteriors, ``sigma_m`` the touch's noise.
+
+    With ``none_weight`` > 0, "none of these" is one more outcome, a contact anywhere
+    along the approach's ``window_m``: its Bhattacharyya coefficient with a hypothesis's
+    Gaussian contact there is sqrt(sigma sqrt(8 pi) / window) (0 against a predicted
+    miss), so that a touch tests the hypotheses against it even where they agree.
+    """
     d = np.where(np.isnan(depths), MISS_DEPTH_M, depths)
-    w = np.asarray(weights, float) / np.sum(weights)
     gap = d[:, None, :] - d[None, :, :]  # (H, H, C)
-    mixture = np.einsum("j,ijc->ic", w, np.exp(-(gap**2) / (8.0 * sigma_m**2)))
+    overlap = np.exp(-(gap**2) / (8.0 * sigma_m**2))
+    w = np.asarray(weights, float)
+    if none_weight > 0 and window_m > 0:
+        across = np.sqrt(min(sigma_m * np.sqrt(8.0 * np.pi) / window_m, 1.0))
+        met = np.where(np.isnan(depths), 0.0, across)  # (H, C)
+        H = len(w)
+        full = np.ones((H + 1, H + 1, d.shape[1]))
+        full[:H, :H], full[:H, H], full[H, :H] = overlap, met, met
+        overlap, w = full, np.append(w, none_weight)
+    w = w / np.sum(w)
+    mixture = np.einsum("j,ijc->ic", w, overlap)
     return np.asarray(-(w @ np.log(mixture)), dtype=np.float64)
 
 
@@ -248,16 +280,19 @@ def _outcomes(belief: Belief) -> tuple[list[str], Array, Array]:
     each hypothesis, and where its pose is uncertain by more than ``SIGMA_FLOOR_M`` (a
     slide along a nearly symmetric surface), its pose moved by +-``SIGMA_SCALE``
     standard deviations along its two most uncertain motions (the rotation scaled by the
-    data's reach); the hypothesis's posterior split evenly among them. The most
-    probable hypothesis's own pose comes first."""
+    data's reach); the hypothesis's posterior split evenly among them. Weights are
+    relative to the hypotheses' total. The most probable hypothesis's own pose comes
+    first."""
     names: list[str] = []
     poses: list[Array] = []
     weights: list[float] = []
+    total = sum(h.posterior for h in belief.hypotheses)
     for h in belief.hypotheses:
-        if h.posterior < MIN_OUTCOME_WEIGHT and poses:
+        share = h.posterior / total if total > 0 else 1.0 / len(belief.hypotheses)
+        if share < MIN_OUTCOME_WEIGHT and poses:
             continue
         own = [h.T_model_from_data]
-        if h.posterior >= 0.001:
+        if share >= SPREAD_WEIGHT:
             for sd, direction in belief.loose_motions(h):
                 if sd < SIGMA_FLOOR_M:
                     break
@@ -265,7 +300,7 @@ def _outcomes(belief: Belief) -> tuple[list[str], Array, Array]:
                 own += [h.moved(motion), h.moved(-motion)]
         names += [h.model] * len(own)
         poses += own
-        weights += [h.posterior / len(own)] * len(own)
+        weights += [share / len(own)] * len(own)
     return names, np.array(poses), np.array(weights)
 
 
@@ -319,7 +354,8 @@ def plan_touch(
     others = predicted_depths(stack, which[1:], poses[1:], starts, directions, limits.depth_m)
     depths = np.concatenate([own[None, keep], others])
     sigma = belief.noise.point_sigma_m(belief.sensor_m)
-    gain = information_gain(depths, weights, sigma)
+    none = min(belief.unexplained, MAX_NONE_WEIGHT)
+    gain = information_gain(depths, (1 - none) * weights, sigma, none, limits.depth_m)
     # a touch that likely hypotheses predict to meet nothing is a guess at an edge: a
     # miss pulls no pose, and the slightest error of them all turns a contact into one
     likely = weights >= LIKELY_WEIGHT * weights.max()

@@ -1,5 +1,7 @@
 """The belief over (model, pose), touch planning and the verification loop."""
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 from testing_meshes import blob, ellipsoid, sphere
@@ -15,7 +17,9 @@ from recognition import (
 )
 from recognition.surfaces.mesh_model import MeshModel
 from recognition.surfaces.noise_model import huber
+from recognition.surfaces.registration import ALIGNED_SEARCH, FastConfig, data_geometry
 from recognition.surfaces.registration.exact import smooth_normals
+from recognition.surfaces.registration.fast import register_fast
 from recognition.surfaces.touch_planning import information_gain, predicted_depths
 from recognition.synthetic import mesh_data_curves, ray_contact, sensed_normal
 
@@ -239,6 +243,50 @@ def test_information_gain_is_log_two_for_two_far_apart_outcomes_and_zero_for_one
     # a predicted miss is an outcome of its own
     miss = information_gain(np.array([[2e-3], [np.nan]]), np.array([0.5, 0.5]), 1e-5)
     np.testing.assert_allclose(miss, [np.log(2)], atol=1e-9)
+
+
+def test_none_of_these_is_an_outcome_spread_over_the_approach():
+    # one hypothesis against "none of these": a touch tests it even with nothing to split
+    sigma, window = 2e-5, 10e-3
+    across = np.sqrt(sigma * np.sqrt(8 * np.pi) / window)  # Bhattacharyya: Gaussian, uniform
+    gain = information_gain(np.array([[4e-3]]), np.array([0.5]), sigma, 0.5, window)
+    np.testing.assert_allclose(gain, [-np.log(0.5 * (1 + across))], rtol=1e-12)
+    assert information_gain(np.array([[4e-3]]), np.array([1.0]), sigma) == pytest.approx(0)
+    # a predicted miss shares nothing with a contact along the approach
+    miss = information_gain(np.array([[np.nan]]), np.array([0.5]), sigma, 0.5, window)
+    np.testing.assert_allclose(miss, [np.log(2)], atol=1e-9)
+
+
+def test_contact_points_choose_the_poses_of_the_search(database):
+    model = database["blob"]
+    # short, noisy curves leave the blob's pose loose: the best fit lies 30 mm away
+    synthetic = _curves(model, 2500, seed=2, noise=0.02e-3, n_points=9, spacing_m=0.6e-3)
+    p = synthetic.point_in_model
+    distance = np.linalg.norm(model.vertices - p, axis=1)
+    touched = model.vertices[[int(np.argmin(np.abs(distance - r))) for r in (10e-3, 14e-3)]]
+    into_data = np.linalg.inv(synthetic.T_model_from_data)
+    contact = touched @ into_data[:3, :3].T + into_data[:3, 3]
+    config = replace(FastConfig(), search=ALIGNED_SEARCH, fallbacks=())
+    geometry = data_geometry(synthetic.curves, config.geometry)
+
+    def touch_residuals_m(found):
+        T = found.poses[0]
+        return np.abs(database.field_stack((contact @ T[:3, :3].T + T[:3, 3])[None], [0])[0])
+
+    alone = register_fast([model], synthetic.curves, geometry, config)[0]
+    assert touch_residuals_m(alone).max() > 0.5e-3
+    touched_too = register_fast([model], synthetic.curves, geometry, config, contact=contact)[0]
+    assert touch_residuals_m(touched_too).max() < 0.15e-3
+
+
+def test_a_broader_search_runs_once_per_touch(database):
+    synthetic = _curves(database["blob"], 2500, seed=2, noise=0.02e-3, n_points=9, spacing_m=0.6e-3)
+    belief = database.recognize(synthetic.curves, models=["blob"]).belief
+    broad = database.broaden(belief)
+    assert belief.broadened is None and broad.broadened == 0
+    assert database.broaden(broad) is broad  # no new touch: nothing to search again
+    touched = database.update(broad, broad.point[None])  # a touch at p, where the curves meet
+    assert touched.broadened == 0 and database.broaden(touched).broadened == 1
 
 
 def test_predicted_depth_along_a_ray_to_the_sphere_centre(database):

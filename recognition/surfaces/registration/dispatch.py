@@ -98,6 +98,7 @@ def register_all(
     which_field: ArrayLike | None = None,
     index: CandidateIndex | None = None,
     threads: int = 1,
+    contact: ArrayLike | None = None,
 ) -> list[Registration]:
     """Register data curves on each of ``models``: one registration per model, in order.
 
@@ -117,6 +118,9 @@ def register_all(
     threads : int
         Thesis, ICP and closed-form modes: models registered concurrently (numpy
         releases the GIL in the heavy array work); results do not depend on it.
+    contact : (k, 3) float, optional
+        Fast mode: further contact points in the curves' frame (verification touches)
+        that choose the poses with the curves (:func:`register_fast`).
 
     Returns
     -------
@@ -130,7 +134,14 @@ def register_all(
     if isinstance(config, FastConfig):
         meshes = [m for m in models if isinstance(m, MeshModel)]
         return register_fast(
-            meshes, curves, geometry, config, stack=stack, which_field=which_field, index=index
+            meshes,
+            curves,
+            geometry,
+            config,
+            stack=stack,
+            which_field=which_field,
+            index=index,
+            contact=contact,
         )
 
     def one(model: Model) -> Registration:

@@ -81,6 +81,7 @@ def _gauss_newton(
     iterations: int,
     tolerance: float = 1e-4,
     clip_m: float | None = None,
+    unclipped: int = 0,
 ) -> tuple[Array, Array, Array, tuple[float, ...]]:
     """Batched Levenberg-damped Gauss-Newton of poses on signed distance fields.
 
@@ -89,8 +90,9 @@ def _gauss_newton(
     truncated quadratic: a residual counts at most the larger of ``clip_m`` and
     ``CLIP_SIGMAS`` robust standard deviations (1.4826 times the median absolute
     residual) of the start's first residuals, and pulls the pose not at all beyond (an
-    outlier). A start stops once a step lowers its cost by less than the fraction
-    ``tolerance`` (or its damping exceeds 1e6); at most ``iterations`` steps. The
+    outlier); the last ``unclipped`` points are trusted and never clipped. A start
+    stops once a step lowers its cost by less than the fraction ``tolerance`` (or its
+    damping exceeds 1e6); at most ``iterations`` steps. The
     rotation turns about the centroid of the placed points. Returns R, t, the RMS
     residual per start (clipped residuals at the clip) and the best RMS after each step.
     """
@@ -102,7 +104,7 @@ def _gauss_newton(
 
     def cost(state: State) -> Array:
         r, clip = state[4], state[6]
-        return np.mean(np.minimum(r * r, clip[:, None] ** 2), axis=1)
+        return np.mean(np.minimum(r * r, clip**2), axis=1)
 
     from recognition.surfaces import field_kernels  # numba: imported when first needed
 
@@ -117,10 +119,12 @@ def _gauss_newton(
         return evaluate(dR @ R, t_new, which, state[6])
 
     which = np.asarray(which)
-    state = evaluate(R, t, which, np.full(len(R), np.inf))
+    clip = np.full((len(R), len(points)), np.inf)
+    state = evaluate(R, t, which, clip)
     if clip_m is not None:
-        spread = CLIP_SIGMAS * 1.4826 * np.median(np.abs(state[4]), axis=1)
-        state = (*state[:6], np.maximum(spread, clip_m))
+        clipped = len(points) - unclipped
+        spread = CLIP_SIGMAS * 1.4826 * np.median(np.abs(state[4][:, :clipped]), axis=1)
+        clip[:, :clipped] = np.maximum(spread, clip_m)[:, None]
     result = damped_least_squares(
         state,
         cost=cost,
@@ -150,12 +154,15 @@ def _search(
     which_field: IntArray,
     threshold_m: float,
     index: CandidateIndex,
+    contact: Array,
 ) -> list[Registration]:
     """One pass of the fast search over ``models`` (fields ``which_field`` in ``stack``,
     candidates ranked by ``index``).
 
     Returns one registration per model, its error read off the distance field, each
     point's distance counted at most ``threshold_m`` (beyond it the point is an outlier).
+    The ``contact`` points (k, 3) join the curves' at every stage of the search, so that
+    they choose and move the poses, but not the error.
     """
     n = len(models)
     seconds = np.zeros(n)
@@ -164,7 +171,9 @@ def _search(
     screen_idx = arm_indices(curves, geometry.point, search.arm_fractions)
     fractions = np.arange(1, search.coarse_per_arm + 1) / search.coarse_per_arm
     coarse_idx = np.unique(arm_indices(curves, geometry.point, fractions))
-    screened = screen(models, stack, which_field, curves, geometry, config, search, seconds, index)
+    screened = screen(
+        models, stack, which_field, curves, geometry, config, search, seconds, index, contact
+    )
 
     def batched(
         poses: list[Poses | None], stage_points: Array, steps: int, clip_m: float | None = None
@@ -178,11 +187,12 @@ def _search(
         R, t, rms, trace = _gauss_newton(
             stack,
             which_field[owner],
-            stage_points,
+            np.concatenate([stage_points, contact]),
             np.concatenate([p.R for _, p in live]),
             np.concatenate([p.t for _, p in live]),
             steps,
             clip_m=clip_m,
+            unclipped=len(contact),
         )
         counts = np.bincount(owner, minlength=n)
         seconds[:] += (time.perf_counter() - start) * counts / counts.sum()
@@ -317,6 +327,7 @@ def register_fast(
     which_field: ArrayLike | None = None,
     noise_m: float | None = None,
     index: CandidateIndex | None = None,
+    contact: ArrayLike | None = None,
 ) -> list[Registration]:
     """Fast-mode registration of the curves on several models at once (module docstring).
 
@@ -337,6 +348,10 @@ def register_fast(
     index : CandidateIndex, optional
         The models' candidate maps in one table, its owners the fields of ``stack``
         (built here if not given).
+    contact : (k, 3) float, optional
+        Further contact points in the curves' frame (verification touches): they join
+        the curves' points in choosing and refining the poses (a pose that misses them
+        is screened out), not in the errors, the polish or the fallback test.
 
     Returns
     -------
@@ -360,7 +375,10 @@ def register_fast(
     search = config.search
     if not trusted:
         search = replace(search, tolerance_scale=np.inf, aligned_anisotropy=np.inf)
-    first = _search(models, stack, curves, geometry, config, search, which_field, threshold, index)
+    extra = np.zeros((0, 3)) if contact is None else np.asarray(contact, float).reshape(-1, 3)
+    first = _search(
+        models, stack, curves, geometry, config, search, which_field, threshold, index, extra
+    )
     registrations = _polish(models, curves, geometry, first, config, threshold, noise)
     acceptable = acceptable_error_m(noise, len(curves.points), config)
     for fallback in config.fallbacks:
@@ -384,6 +402,7 @@ def register_fast(
             which_field[kept],
             threshold,
             index,
+            extra,
         )
         merged = list(registrations)
         for w, b in zip(kept, found, strict=True):

@@ -167,6 +167,7 @@ def screen(
     search: FastSearchConfig,
     log: Array,
     index: CandidateIndex,
+    contact: Array | None = None,
 ) -> list[Screened]:
     """Candidate poses of every model, scored on the screening points.
 
@@ -177,10 +178,17 @@ def screen(
     ``n_screened`` poses (with a ``screened_budget``, only those among the best of all
     models), the candidate vertices, and whether it had candidates within the lookup
     tolerance. ``log`` (per model, seconds) receives the time, shared by candidate count.
+    ``contact`` (k, 3), further contact points of the data (verification touches), joins
+    both the prescreening and the screening points.
     """
     n = len(models)
-    points = curves.points[arm_indices(curves, geometry.point, search.arm_fractions)]
-    pre_points = curves.points[arm_indices(curves, geometry.point, search.prescreen_fractions)]
+    extra = np.zeros((0, 3)) if contact is None else np.asarray(contact, float).reshape(-1, 3)
+    points = np.concatenate(
+        [curves.points[arm_indices(curves, geometry.point, search.arm_fractions)], extra]
+    )
+    pre_points = np.concatenate(
+        [curves.points[arm_indices(curves, geometry.point, search.prescreen_fractions)], extra]
+    )
     best_R: list[list[Array]] = [[] for _ in models]
     best_t: list[list[Array]] = [[] for _ in models]
     best_s: list[list[Array]] = [[] for _ in models]
