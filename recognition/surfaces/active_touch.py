@@ -4,13 +4,15 @@ After the three curves, :func:`verify` repeats: plan the touch of greatest expec
 information gain (:func:`~recognition.surfaces.touch_planning.plan_touch`), make it
 (``touch``: the robot, or a ray cast on a known surface in a benchmark; its contact point,
 with the surface normal when the sensor gives one), refine and re-score every hypothesis
-with all the contact (:meth:`Belief.with_contacts`); when no
-hypothesis explains the contact any more, the curves and the touches' contact points are
-searched again more broadly (:meth:`~recognition.surfaces.database.ModelDatabase.broaden`,
-at most once per touch). It stops once the
-belief's confidence (:attr:`Belief.confidence`) reaches ``confidence``, the touches are
-spent, or no allowed touch can tell the hypotheses apart. A belief that is sure after the
-curves makes no touch.
+with all the contact (:meth:`Belief.with_contacts`). When no hypothesis explains the
+contact any more, or when a touch has made the belief sure, the curves and the touches'
+contact points are searched again more broadly
+(:meth:`~recognition.surfaces.database.ModelDatabase.broaden`, at most once per touch):
+poses the first search never proposed, but which fit all the contact as well, compete
+before an answer is called sure. It stops once the belief's confidence
+(:attr:`Belief.confidence`) reaches ``confidence``, the touches are spent, or no allowed
+touch can tell the hypotheses apart. A belief that is sure after the curves makes no
+touch.
 """
 
 from __future__ import annotations
@@ -174,6 +176,9 @@ def verify(
                 windows=[plan.travel_m],
                 normals=np.asarray(normal, float)[None],
             )
+        if belief.confidence >= confidence and belief.broadened != len(belief.windows):
+            # sure after a touch: first look elsewhere for poses that fit all the contact
+            belief = database.broaden(belief)
         best = belief.best
         steps.append(
             TouchStep(

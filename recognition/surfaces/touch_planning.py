@@ -15,10 +15,10 @@ exact when the predictions are far apart or equal; a miss counts as an outcome f
 every contact. The weights are the hypotheses' posteriors relative to their total, and
 "none of these" (:attr:`Belief.unexplained`, counted at most ``MAX_NONE_WEIGHT``) is one
 more outcome, a contact anywhere along the approach: a touch tests the hypotheses
-against it even where they agree. The touch of greatest bound is chosen. Touches the stylus cannot make (a
-surface tilted beyond ``max_tilt_rad`` from ``up``), below ``min_height_m`` (the table),
-too close to contact already made, occluded on the best hypothesis or refused by the
-caller's ``reachable`` are never candidates.
+against it even where they agree. The touch of greatest bound is chosen. Touches the
+stylus cannot make (a surface tilted beyond ``max_tilt_rad`` from ``up``), below
+``min_height_m`` (the table), too close to contact already made, occluded on the best
+hypothesis or refused by the caller's ``reachable`` are never candidates.
 """
 
 from __future__ import annotations

@@ -103,6 +103,8 @@ def test_touches_tell_two_similar_models_apart(database):
     assert done.belief.confidence >= 0.99
     assert 1 <= len(done.steps) <= 5
     assert done.stop == "sure"
+    # sure after a touch only once a broader search with all the touches found no rival
+    assert done.belief.broadened == len(done.belief.windows)
     # the ellipsoid's mirror images are the same answer
     images = done.belief.best.location_images
     assert len(images) > 1
