@@ -271,10 +271,13 @@ class ModelDatabase:
         """``belief`` with the poses of a broader search of its contact added (the fast
         mode's first fallback pass: candidates over every model's whole surface, more
         poses kept; the touches' contact points choose the poses with the curves): for
-        when no hypothesis explains the contact (:attr:`Belief.unexplained`). Unchanged
-        without curves, or when a broader search has already had all its touches."""
+        when no hypothesis explains the contact (:attr:`Belief.unexplained`), or to look
+        for rivals of a sure answer. A pose that misses a touch by more than the noise
+        model's outlier level is left out (it could not compete). Unchanged without
+        curves, or when a broader search has already had all its touches."""
         if belief.curves is None or belief.broadened == len(belief.windows):
             return belief
+        touches = belief.points[belief.n_curve_points :]
         config = self.registration if isinstance(self.registration, FastConfig) else FastConfig()
         wide = replace(config, search=ALIGNED_SEARCH, fallbacks=())
         geometry = data_geometry(belief.curves, wide.geometry)
@@ -286,9 +289,17 @@ class ModelDatabase:
             stack=self.field_stack,
             which_field=np.arange(len(self)),
             index=self.candidate_index,
-            contact=belief.points[belief.n_curve_points :],
+            contact=touches,
         )
-        poses = [(r.model, T) for r in found if not r.rejected for T in r.poses]
+        level = belief.noise.outlier_level_m(belief.sensor_m)
+        poses = []
+        for w, r in enumerate(found):
+            if r.rejected or not len(r.poses):
+                continue
+            placed = touches @ r.poses[:, :3, :3].transpose(0, 2, 1) + r.poses[:, None, :3, 3]
+            within = np.abs(self.field_stack(placed, np.full(len(r.poses), w))) <= level
+            kept = np.flatnonzero(np.all(within, axis=1))
+            poses += [(r.model, r.poses[k]) for k in kept]
         return belief.with_poses(self.models, poses)
 
     def plan_touch(self, belief: Belief, limits: TouchLimits, seed: int = 0) -> TouchPlan | None:
