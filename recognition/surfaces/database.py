@@ -37,6 +37,11 @@ from recognition.surfaces.registration import (
 
 __all__ = ["DATABASE_FORMAT", "MeshRegistrationConfig", "ModelDatabase", "Recognition"]
 
+#: A broader search's pose that misses a touch by more than this, metres, is left out: a
+#: pose uncertain by 0.3 mm along the touch's normal loses more than 5 nats on it
+#: (:mod:`~recognition.surfaces.touch_evidence`) against one that meets it.
+RIVAL_MISS_M = 1.0e-3
+
 if TYPE_CHECKING:
     from recognition.surfaces.touch_planning import TouchLimits, TouchPlan
 
@@ -272,8 +277,8 @@ class ModelDatabase:
         mode's first fallback pass: candidates over every model's whole surface, more
         poses kept; the touches' contact points choose the poses with the curves): for
         when no hypothesis explains the contact (:attr:`Belief.unexplained`), or to look
-        for rivals of a sure answer. A pose that misses a touch by more than the noise
-        model's outlier level is left out (it could not compete). Unchanged without
+        for rivals of a sure answer. A pose that misses a touch by more than
+        ``RIVAL_MISS_M`` is left out (it could not compete). Unchanged without
         curves, or when a broader search has already had all its touches."""
         if belief.curves is None or belief.broadened == len(belief.windows):
             return belief
@@ -291,7 +296,7 @@ class ModelDatabase:
             index=self.candidate_index,
             contact=touches,
         )
-        level = belief.noise.outlier_level_m(belief.sensor_m)
+        level = RIVAL_MISS_M
         poses = []
         for w, r in enumerate(found):
             if r.rejected or not len(r.poses):
