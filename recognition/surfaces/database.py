@@ -296,13 +296,12 @@ class ModelDatabase:
             index=self.candidate_index,
             contact=touches,
         )
-        level = RIVAL_MISS_M
         poses = []
         for w, r in enumerate(found):
             if r.rejected or not len(r.poses):
                 continue
             placed = touches @ r.poses[:, :3, :3].transpose(0, 2, 1) + r.poses[:, None, :3, 3]
-            within = np.abs(self.field_stack(placed, np.full(len(r.poses), w))) <= level
+            within = np.abs(self.field_stack(placed, np.full(len(r.poses), w))) <= RIVAL_MISS_M
             kept = np.flatnonzero(np.all(within, axis=1))
             poses += [(r.model, r.poses[k]) for k in kept]
         return belief.with_poses(self.models, poses)
