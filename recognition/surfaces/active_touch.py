@@ -152,7 +152,7 @@ def verify(
         if k == max_touches:
             break
         start = time.perf_counter()
-        if belief.unexplained >= BROADEN_AT and belief.broadened != len(belief.windows):
+        if belief.unexplained >= BROADEN_AT:  # (broaden: once per touch)
             belief = database.broaden(belief)
             broaden_s += time.perf_counter() - start
             if belief.confidence >= confidence:
@@ -176,7 +176,7 @@ def verify(
                 windows=[plan.travel_m],
                 normals=np.asarray(normal, float)[None],
             )
-        if belief.confidence >= confidence and belief.broadened != len(belief.windows):
+        if belief.confidence >= confidence:
             # sure after a touch: first look elsewhere for poses that fit all the contact
             belief = database.broaden(belief)
         best = belief.best

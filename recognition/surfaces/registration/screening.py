@@ -167,7 +167,7 @@ def screen(
     search: FastSearchConfig,
     log: Array,
     index: CandidateIndex,
-    contact: Array | None = None,
+    contact: Array,
 ) -> list[Screened]:
     """Candidate poses of every model, scored on the screening points.
 
@@ -178,16 +178,15 @@ def screen(
     ``n_screened`` poses (with a ``screened_budget``, only those among the best of all
     models), the candidate vertices, and whether it had candidates within the lookup
     tolerance. ``log`` (per model, seconds) receives the time, shared by candidate count.
-    ``contact`` (k, 3), further contact points of the data (verification touches), joins
-    both the prescreening and the screening points.
+    ``contact`` (k, 3), further contact points of the data (verification touches; may be
+    empty), joins both the prescreening and the screening points.
     """
     n = len(models)
-    extra = np.zeros((0, 3)) if contact is None else np.asarray(contact, float).reshape(-1, 3)
     points = np.concatenate(
-        [curves.points[arm_indices(curves, geometry.point, search.arm_fractions)], extra]
+        [curves.points[arm_indices(curves, geometry.point, search.arm_fractions)], contact]
     )
     pre_points = np.concatenate(
-        [curves.points[arm_indices(curves, geometry.point, search.prescreen_fractions)], extra]
+        [curves.points[arm_indices(curves, geometry.point, search.prescreen_fractions)], contact]
     )
     best_R: list[list[Array]] = [[] for _ in models]
     best_t: list[list[Array]] = [[] for _ in models]
