@@ -131,3 +131,40 @@ def test_an_arm_that_drops_over_an_edge_gives_no_ring_sample():
     geometry = data_geometry(data_curves)
     rings = data_ring_descriptors(data_curves, geometry)
     assert abs(rings[1, 0]) < 1e-6 and abs(rings[1, 1]) < 1e-6
+
+
+def test_lookup_scans_the_k1_window_and_keeps_what_a_full_scan_keeps():
+    """The index is ordered by k1, so a lookup (4.7) scans only the rows whose k1 lies
+    within the tolerance; its rows per model are those a scan of every row keeps, in
+    ascending order, and the budget keeps the rows of least score."""
+    models = {"ball": MeshModel("ball", sphere(radius=0.03)), "blob": MeshModel("blob", blob())}
+    index = ModelDatabase(models).prepare().candidate_index
+    assert np.all(np.diff(index.k1) >= 0)
+    model = models["blob"]
+    vertex = 2500
+    curves = mesh_data_curves(
+        model.mesh,
+        vertex,
+        normal=model.normals[vertex],
+        n_points=41,
+        spacing_m=0.4e-3,
+        rng=np.random.default_rng(3),
+    ).curves
+    geometry = data_geometry(curves)
+    rings = data_ring_descriptors(curves, geometry)
+    fields = np.arange(2)
+    tolerance = 8.0  # 1/m: a narrow window of the table
+    chosen, matched = index.select(geometry, rings, tolerance, None, fields)
+    within = np.hypot(index.k1 - geometry.k1, index.k2 - geometry.k2) < tolerance
+    assert within.sum() < 0.5 * index.k1.size
+    for field in fields:
+        expected = np.sort(index.row[within & (index.owner == field)])
+        np.testing.assert_array_equal(chosen[field], expected)
+        assert matched[field] == (expected.size > 0)
+    assert sum(c.size for c in chosen) > 0
+    budget = 20
+    kept, _ = index.select(geometry, rings, tolerance, budget, fields)
+    assert sum(k.size for k in kept) == budget
+    for field in fields:
+        assert np.isin(kept[field], chosen[field]).all()
+        assert np.all(np.diff(kept[field]) > 0)

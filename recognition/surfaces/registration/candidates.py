@@ -28,7 +28,9 @@ def smallest(values: NDArray[np.floating], count: int | float) -> NDArray[np.int
 
 @dataclass(frozen=True, eq=False)
 class CandidateIndex:
-    """Every model's candidate map (:attr:`MeshModel.candidate_curvatures`) in one table.
+    """Every model's candidate map (:attr:`MeshModel.candidate_curvatures`) in one table,
+    its rows in ascending order of k1, so that a lookup (4.7) scans only the rows whose
+    k1 lies within the tolerance (found by bisection), not the whole table.
 
     Attributes
     ----------
@@ -37,6 +39,7 @@ class CandidateIndex:
     row : (R,) int
         The row in its model's candidate map.
     k1, k2 : (R,) float, 1/m
+        ``k1`` ascending.
     rings : (R, K, 2) float32
         Ring descriptors (:mod:`~recognition.surfaces.rings`).
     """
@@ -53,12 +56,14 @@ class CandidateIndex:
         the stack; default 0, 1, ...)."""
         maps = [m.candidate_curvatures for m in models]
         owners = np.arange(len(maps)) if owners is None else np.asarray(owners)
+        k1 = np.concatenate([c.k1 for c in maps])
+        order = np.argsort(k1, kind="stable")
         return cls(
-            np.repeat(owners, [len(c) for c in maps]),
-            np.concatenate([np.arange(len(c)) for c in maps]),
-            np.concatenate([c.k1 for c in maps]),
-            np.concatenate([c.k2 for c in maps]),
-            np.concatenate([m.rings for m in models]),
+            np.repeat(owners, [len(c) for c in maps])[order],
+            np.concatenate([np.arange(len(c)) for c in maps])[order],
+            k1[order],
+            np.concatenate([c.k2 for c in maps])[order],
+            np.concatenate([m.rings for m in models])[order],
         )
 
     def select(
@@ -83,11 +88,15 @@ class CandidateIndex:
 
         allowed = np.zeros(int(self.owner.max()) + 1, bool)
         allowed[fields] = True
+        lo, hi = 0, self.k1.size
+        if np.isfinite(tolerance):
+            window = [geometry.k1 - tolerance, geometry.k1 + tolerance]
+            lo, hi = (int(i) for i in np.searchsorted(self.k1, window))
         keep, score = field_kernels.candidate_scores(
-            self.owner,
-            self.k1,
-            self.k2,
-            self.rings,
+            self.owner[lo:hi],
+            self.k1[lo:hi],
+            self.k2[lo:hi],
+            self.rings[lo:hi],
             allowed,
             float(geometry.k1),
             float(geometry.k2),
@@ -97,6 +106,7 @@ class CandidateIndex:
             MISSING_COST,
             MAX_COST,
         )
+        keep += lo
         matched = np.bincount(self.owner[keep], minlength=len(allowed))[fields] > 0
         if budget is not None and keep.size > budget:
             keep = np.sort(keep[smallest(score, budget)])
@@ -104,4 +114,5 @@ class CandidateIndex:
         owner = self.owner[keep]
         starts = np.searchsorted(owner, fields, side="left")
         ends = np.searchsorted(owner, fields, side="right")
-        return [self.row[keep[a:b]] for a, b in zip(starts, ends, strict=True)], matched
+        rows = [np.sort(self.row[keep[a:b]]) for a, b in zip(starts, ends, strict=True)]
+        return rows, matched
