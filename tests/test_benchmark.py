@@ -22,6 +22,7 @@ from recognition.surfaces.database import ModelDatabase
 from recognition.surfaces.registration import ClosedFormConfig, FastConfig
 from tactile_sim.cli import run_cli
 from tactile_sim.evaluation import SWEEPS, BenchmarkConfig, run
+from tactile_sim.evaluation.benchmark import plan_jobs
 
 ROOT = Path(__file__).resolve().parents[1]
 SOURCE = bench.SyntheticSource(per_model=4, n_points=21, spacing_m=1.2e-3, separation_m=5e-3)
@@ -562,3 +563,26 @@ def test_touching_jobs_record_their_touches_under_their_own_settings(
             assert touches["made"] == 0 and touches["stop"] == "sure"
     # resumed, not redone: the same records read back
     assert bench.run(database_dir, touching, path, progress=False) == records
+
+
+def test_a_results_file_shared_by_two_databases_resumes_each_ones_records_only(
+    database_dir: Path, jobs: list[bench.Job], tmp_path: Path
+) -> None:
+    """A database-size sweep given one --results file runs every size into it: a record
+    made against one database must not count as done against another."""
+    path = tmp_path / "records.jsonl"
+    first = [dataclasses.replace(j, models="size-10") for j in jobs[:2]]
+    other = [dataclasses.replace(j, models="size-100") for j in jobs[:2]]
+    made = bench.run(database_dir, first, path, progress=False)
+    assert len(made) == 2
+    both = bench.run(database_dir, other, path, progress=False)
+    assert len(both) == 4
+    settings = [{j.settings(FastConfig()) for j in js} for js in (first, other)]
+    assert settings[0].isdisjoint(settings[1])
+    assert {r.settings for r in made} == settings[0]
+    assert {r.settings for r in both} == settings[0] | settings[1]
+    # the benchmark keys its jobs by the database folder it loads
+    planned = plan_jobs(
+        [j.spec for j in jobs[:1]], SOURCE, {"fast": FastConfig()}, 0, 0, database_dir
+    )
+    assert planned[0].models == database_dir.name

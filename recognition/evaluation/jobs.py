@@ -44,12 +44,17 @@ class Job:
     touches : int
         Verification touches after the curves, at most (fast mode, sources that can
         touch; :func:`recognition.verify`); 0: none.
+    models : str
+        The models the instance is recognised against (a database folder's name, which
+        hashes its content); part of the records' settings, so that a record made
+        against other models is never resumed as this job's. Empty: not recorded.
     """
 
     spec: InstanceSpec
     source: InstanceSource
     configs: tuple[RegistrationConfig, ...]
     touches: int = 0
+    models: str = ""
 
     def __post_init__(self) -> None:
         if len(set(self.methods)) != len(self.methods):
@@ -61,8 +66,12 @@ class Job:
         return tuple(c.mode.value for c in self.configs)
 
     def settings(self, config: RegistrationConfig) -> str:
-        """The settings key of the records made with ``config`` (and the touches)."""
-        return settings_key(self.source, config, ("touches", self.touches) if self.touches else ())
+        """The settings key of the records made with ``config`` (the touches and the
+        models too, when set)."""
+        extra: tuple[str | int, ...] = ("touches", self.touches) if self.touches else ()
+        if self.models:
+            extra += ("models", self.models)
+        return settings_key(self.source, config, extra)
 
 
 def _source_payload(source: Any) -> dict[str, Any]:

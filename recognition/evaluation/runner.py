@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Callable, Sequence
+from dataclasses import replace
 from pathlib import Path
 
 from recognition.evaluation.jobs import Job, run_job
@@ -43,7 +44,7 @@ def _todo(jobs: Sequence[Job], done: set[tuple[str, str, str | None]]) -> tuple[
         )
         total += len(job.configs)
         if missing:
-            todo.append(Job(job.spec, job.source, missing, job.touches))
+            todo.append(replace(job, configs=missing))
     return todo, total
 
 

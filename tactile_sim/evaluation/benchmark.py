@@ -86,18 +86,20 @@ def plan_jobs(
     configs: Mapping[str, RegistrationConfig],
     thesis_instances: int,
     touches: int = 0,
+    models: DatabaseHandle | None = None,
 ) -> list[Job]:
     """One job per instance with the registration of every method; thesis mode (about a
     minute an instance) only on the first ``thesis_instances`` (0: all), spread over the
     models: instance 0 of each, then 1, ...; at most ``touches`` verification touches
-    after the curves."""
+    after the curves; the records keyed by ``models`` (:func:`_models_key`), so that a
+    results file shared by several databases resumes each one's records only."""
     first = sorted(specs, key=lambda s: (s.index, s.model))[: thesis_instances or len(specs)]
     thesis_keys = {s.key for s in first}
     jobs = []
     for spec in specs:
         chosen = tuple(c for m, c in configs.items() if m != "thesis" or spec.key in thesis_keys)
         if chosen:
-            jobs.append(Job(spec, source, chosen, touches))
+            jobs.append(Job(spec, source, chosen, touches, _models_key(models)))
     return jobs
 
 
@@ -139,9 +141,16 @@ def _results_path(
     folder's name alone."""
     if config.run.results is not None:
         return config.run.results
-    models = handle.name if isinstance(handle, Path) else repr(handle)
-    key = settings_key(source, registration, (models,))
+    key = settings_key(source, registration, (_models_key(handle),))
     return Path(config.run.records_dir) / f"{name}{tag}_{key}.jsonl"
+
+
+def _models_key(handle: DatabaseHandle | None) -> str:
+    """What names the models of a run: a database folder's name (a hash of its content
+    and settings), the closed-form models' repr; empty for None."""
+    if handle is None:
+        return ""
+    return handle.name if isinstance(handle, Path) else repr(handle)
 
 
 def _shown(path: Path) -> str:
@@ -248,6 +257,7 @@ def run_synthetic(
         methods.configs(),
         methods.thesis_instances,
         methods.touches,
+        _directory(database),
     )
     records = _records(config, _directory(database), jobs, path)
     summary = summarize(records)
@@ -289,6 +299,7 @@ def run_sweep(
             source,
             {"fast": registration},
             methods.thesis_instances,
+            models=_directory(database),
         )
         records = _records(config, _directory(database), jobs, path)
         results[value] = summarize(records)["fast"]
@@ -361,7 +372,9 @@ def run_size_sweep(config: BenchmarkConfig, started: str, *, echo: Echo = print)
         handle = _directory(database)
         path = _results_path(config, name, source, registration, "_sweep", handle)
         specs = sized_specs(database, source, syn.per_generated)
-        jobs = plan_jobs(specs, source, {"fast": registration}, methods.thesis_instances)
+        jobs = plan_jobs(
+            specs, source, {"fast": registration}, methods.thesis_instances, models=handle
+        )
         results[value] = summarize(_records(config, handle, jobs, path))["fast"]
         footprints[size] = database_footprint(handle)
         del database
@@ -489,6 +502,7 @@ def run_sim(config: BenchmarkConfig, *, echo: Echo = print) -> dict[str, Any]:
             configs,
             config.methods.thesis_instances,
             config.methods.touches if experiment == "catalog" else 0,
+            handle,
         )
         records = _records(config, handle, jobs, path)
         found = summarize(records)
