@@ -18,7 +18,7 @@ from recognition.surfaces.rings import (
     ring_invariants,
     ring_scores,
 )
-from recognition.synthetic import mesh_data_curves
+from recognition.synthetic import SyntheticCurves, mesh_data_curves
 
 
 @pytest.fixture(scope="module")
@@ -85,6 +85,20 @@ def test_scores_rank_the_matching_surface_first_and_bound_a_spoiled_ring():
     assert scores[3] == pytest.approx(MAX_COST, rel=1e-6)
 
 
+def _blob_curves(model: MeshModel, noise_std_m: float, seed: int) -> SyntheticCurves:
+    """Three curves of 41 points 0.4 mm apart through vertex 2500 of the blob."""
+    vertex = 2500
+    return mesh_data_curves(
+        model.mesh,
+        vertex,
+        normal=model.normals[vertex],
+        n_points=41,
+        spacing_m=0.4e-3,
+        rng=np.random.default_rng(seed),
+        noise_std_m=noise_std_m,
+    )
+
+
 def test_a_small_budget_still_recognises_and_locates():
     """With a candidate budget of a few hundred rows across the database (of a few
     thousand within the tolerance), the rings keep the true place among them."""
@@ -94,17 +108,7 @@ def test_a_small_budget_still_recognises_and_locates():
         "blob": MeshModel("blob", blob()),
     }
     database = ModelDatabase(models).prepare()
-    model = models["blob"]
-    vertex = 2500
-    synthetic = mesh_data_curves(
-        model.mesh,
-        vertex,
-        normal=model.normals[vertex],
-        n_points=41,
-        spacing_m=0.4e-3,
-        rng=np.random.default_rng(2),
-        noise_std_m=0.01e-3,
-    )
+    synthetic = _blob_curves(models["blob"], noise_std_m=0.01e-3, seed=2)
     default = FastConfig()
     tight = replace(
         default,
@@ -140,16 +144,7 @@ def test_lookup_scans_the_k1_window_and_keeps_what_a_full_scan_keeps():
     models = {"ball": MeshModel("ball", sphere(radius=0.03)), "blob": MeshModel("blob", blob())}
     index = ModelDatabase(models).prepare().candidate_index
     assert np.all(np.diff(index.k1) >= 0)
-    model = models["blob"]
-    vertex = 2500
-    curves = mesh_data_curves(
-        model.mesh,
-        vertex,
-        normal=model.normals[vertex],
-        n_points=41,
-        spacing_m=0.4e-3,
-        rng=np.random.default_rng(3),
-    ).curves
+    curves = _blob_curves(models["blob"], noise_std_m=0.0, seed=3).curves
     geometry = data_geometry(curves)
     rings = data_ring_descriptors(curves, geometry)
     fields = np.arange(2)

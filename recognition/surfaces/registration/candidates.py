@@ -109,10 +109,9 @@ class CandidateIndex:
         keep += lo
         matched = np.bincount(self.owner[keep], minlength=len(allowed))[fields] > 0
         if budget is not None and keep.size > budget:
-            keep = np.sort(keep[smallest(score, budget)])
-        keep = keep[np.argsort(self.owner[keep], kind="stable")]
+            keep = keep[smallest(score, budget)]
+        keep = keep[np.lexsort((self.row[keep], self.owner[keep]))]  # by model, then row
         owner = self.owner[keep]
         starts = np.searchsorted(owner, fields, side="left")
         ends = np.searchsorted(owner, fields, side="right")
-        rows = [np.sort(self.row[keep[a:b]]) for a, b in zip(starts, ends, strict=True)]
-        return rows, matched
+        return [self.row[keep[a:b]] for a, b in zip(starts, ends, strict=True)], matched
