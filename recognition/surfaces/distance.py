@@ -22,7 +22,7 @@ from scipy.spatial import cKDTree
 
 from recognition.rigid import cross
 
-__all__ = ["DistanceField", "MeshDistance"]
+__all__ = ["DistanceField", "MeshDistance", "folded_faces"]
 
 Array = NDArray[np.float64]
 Array32 = NDArray[np.float32]
@@ -34,6 +34,30 @@ def _unit_normals(triangles: Array) -> Array:
     """Unit normals (f, 3) of triangles (f, 3, 3), by their corners' order."""
     fn = cross(triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0])
     return fn / np.maximum(np.linalg.norm(fn, axis=1, keepdims=True), 1e-300)
+
+
+def folded_faces(vertices: Array, faces: IntArray) -> Mask:
+    """Faces (f,) whose normal points against the surface around them: against the sum
+    of their corners' area-weighted vertex normals.
+
+    Marching cubes leaves slivers of almost no area (a corner a nanometre off the line
+    of the other two), and a displacement of the surface can push that corner through
+    the line: the sliver's normal then points into the object while its neighbours'
+    point out. Area weighting gives such a face no say in its corners' normals, so the
+    test finds it; on a closed, consistently oriented mesh no face of real size fails it.
+    """
+    corners = vertices[faces]
+    weighted = cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    owner = faces.ravel()
+    at_vertex = np.stack(
+        [
+            np.bincount(owner, weights=np.repeat(weighted[:, k], 3), minlength=len(vertices))
+            for k in range(3)
+        ],
+        axis=1,
+    )
+    around = at_vertex[faces].sum(axis=1)
+    return np.asarray(np.einsum("ij,ij->i", weighted, around) < 0.0)
 
 
 @dataclass(frozen=True)
@@ -88,20 +112,34 @@ class MeshDistance:
             )
         self._grid: _CellGrid | None = None
         self._face_normals: Array | None = None
+        self._folded: Mask | None = None
+
+    @property
+    def folded(self) -> Mask:
+        """Faces (f,) whose corner order points their normal into the object
+        (:func:`folded_faces`; computed on first use and kept)."""
+        if self._folded is None:
+            self._folded = folded_faces(self.vertices, self.faces)
+        return self._folded
 
     @property
     def face_normals(self) -> Array:
-        """Unit face normals (f, 3) (computed on first use and kept)."""
+        """Unit outward face normals (f, 3): by the corners' order, turned over on the
+        :attr:`folded` faces (computed on first use and kept)."""
         if self._face_normals is None:
-            self._face_normals = _unit_normals(self.vertices[self.faces])
+            normals = _unit_normals(self.vertices[self.faces])
+            normals[self.folded] *= -1.0
+            self._face_normals = normals
         return self._face_normals
 
     def normals_of(self, faces: ArrayLike) -> Array:
-        """Unit normals (..., 3) of the faces ``faces`` (...,), the same numbers as
+        """Unit outward normals (..., 3) of the faces ``faces`` (...,), the same numbers as
         :attr:`face_normals`, computed on each call (a search polishes on many models and
-        reads few faces of each: nothing is kept)."""
-        f = np.asarray(faces, dtype=np.int64)
-        return _unit_normals(self.vertices[self.faces[f.ravel()]]).reshape(*f.shape, 3)
+        reads few faces of each: only the :attr:`folded` mask is kept)."""
+        f = np.asarray(faces, dtype=np.int64).ravel()
+        normals = _unit_normals(self.vertices[self.faces[f]])
+        normals[self.folded[f]] *= -1.0
+        return normals.reshape(*np.shape(faces), 3)
 
     @property
     def grid(self) -> _CellGrid:
@@ -187,7 +225,8 @@ class MeshDistance:
         )
 
     def signed(self, points: ArrayLike) -> Array:
-        """Signed distance (positive outside), sign from the closest face's normal.
+        """Signed distance (positive outside), sign from the closest face's outward
+        normal (:attr:`face_normals`).
 
         Parameters
         ----------

@@ -6,7 +6,8 @@ import pytest
 import trimesh
 from testing_meshes import blob, cylinder, torus
 
-from recognition.surfaces.distance import MeshDistance
+from recognition.surfaces.distance import MeshDistance, folded_faces
+from recognition.synthetic import ray_contact
 
 
 def reference(vertices: np.ndarray, faces: np.ndarray, points: np.ndarray) -> np.ndarray:
@@ -185,3 +186,47 @@ def test_normals_of_some_faces_are_those_of_all_faces():
     faces = np.random.default_rng(4).integers(len(mesh.faces), size=(7, 5))
     np.testing.assert_array_equal(distance.normals_of(faces), distance.face_normals[faces])
     np.testing.assert_allclose(distance.face_normals, mesh.face_normals, atol=1e-12)
+
+
+def folded_sphere() -> tuple[np.ndarray, np.ndarray, int]:
+    """An icosphere whose first face is split at a corner just past one of its edges (by
+    a nanometre): the sliver on that edge points into the sphere, as marching cubes'
+    slivers do once a surface is displaced. Returns vertices, faces and that corner."""
+    sphere = trimesh.creation.icosphere(subdivisions=3, radius=0.02)
+    vertices, faces = sphere.vertices, sphere.faces
+    a, b, c = faces[0]
+    middle = 0.5 * (vertices[a] + vertices[b])
+    across = (vertices[c] - middle) / np.linalg.norm(vertices[c] - middle)
+    k = len(vertices)
+    vertices = np.vstack([vertices, middle - 1e-9 * across])
+    faces = np.vstack([[[a, b, k], [b, c, k], [c, a, k]], faces[1:]])
+    return vertices, faces, k
+
+
+def test_a_folded_sliver_is_turned_over_and_signs_stay_right():
+    vertices, faces, corner = folded_sphere()
+    assert trimesh.Trimesh(vertices, faces, process=False).is_watertight
+    np.testing.assert_array_equal(np.flatnonzero(folded_faces(vertices, faces)), [0])
+    distance = MeshDistance(vertices, faces)
+    outward = vertices[corner] / np.linalg.norm(vertices[corner])
+    assert distance.face_normals[0] @ outward > 0.99
+    np.testing.assert_array_equal(distance.normals_of([0, 5]), distance.face_normals[[0, 5]])
+    points = vertices[corner] + np.random.default_rng(0).normal(size=(2000, 3)) * 1e-3
+    signed, _, face = distance.signed_closest(points)
+    assert np.sum(face == 0) >= 10  # the sliver is the closest face of some points
+    inside = igl.winding_number(vertices, faces, points) > 0.5
+    np.testing.assert_array_equal(signed < 0, inside)
+
+
+def test_a_touch_by_ray_lands_on_the_surface_past_a_folded_sliver():
+    vertices, faces, corner = folded_sphere()
+    distance = MeshDistance(vertices, faces)
+    rng = np.random.default_rng(1)
+    outward = vertices[corner] / np.linalg.norm(vertices[corner])
+    for _ in range(50):
+        direction = -outward + 0.3 * rng.normal(size=3)
+        start = vertices[corner] - 2e-3 * direction / np.linalg.norm(direction)
+        start += rng.normal(size=3) * 0.3e-3
+        point = ray_contact(distance, np.eye(4), start, direction, 0.01)
+        assert point is not None
+        assert distance.closest(point[None])[0][0] < 1e-8
