@@ -284,7 +284,8 @@ class ModelDatabase:
             return belief
         touches = belief.points[belief.n_curve_points :]
         config = self.registration if isinstance(self.registration, FastConfig) else FastConfig()
-        wide = replace(config, search=ALIGNED_SEARCH, fallbacks=())
+        mismatch = max(config.model_mismatch_m, belief.noise.model_mismatch_m)
+        wide = replace(config, search=ALIGNED_SEARCH, fallbacks=(), model_mismatch_m=mismatch)
         geometry = data_geometry(belief.curves, wide.geometry)
         found = register_all(
             list(self.models.values()),

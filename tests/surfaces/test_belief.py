@@ -291,6 +291,29 @@ def test_a_broader_search_runs_once_per_touch(database):
     assert touched.broadened == 0 and database.broaden(touched).broadened == 1
 
 
+def test_a_broader_search_counts_outliers_as_the_recognition_did(database, monkeypatch):
+    """Told the object differs from its model, recognition clips points at a level that
+    mismatch allows; the broader search after touches uses the same level, not the
+    database's (which would clip the true pose's points as outliers)."""
+    synthetic = _curves(database["blob"], 2500, seed=2, noise=0.02e-3, n_points=9, spacing_m=0.6e-3)
+    told = FastConfig(model_mismatch_m=0.1e-3)
+    belief = database.recognize(synthetic.curves, told, models=["blob"]).belief
+    assert belief.noise.model_mismatch_m == told.model_mismatch_m
+    import recognition.surfaces.database as database_module
+
+    seen = []
+    real = database_module.register_all
+    monkeypatch.setattr(
+        database_module,
+        "register_all",
+        lambda models, curves, config, **kw: (
+            seen.append(config) or real(models, curves, config, **kw)
+        ),
+    )
+    database.broaden(belief)
+    assert seen and seen[0].model_mismatch_m == told.model_mismatch_m
+
+
 def test_predicted_depth_along_a_ray_to_the_sphere_centre(database):
     stack = database.field_stack
     which = np.array([database.names.index("sphere")])
