@@ -21,7 +21,7 @@ from recognition.errors import (
     NoRealSolution,
     RecognitionError,
 )
-from recognition.surfaces.active_touch import Contact, TouchStep, Verification, verify
+from recognition.surfaces.active_touch import Contact, NoReading, TouchStep, Verification, verify
 from recognition.surfaces.belief import Belief, BeliefConfig, Hypothesis
 from recognition.surfaces.data_curves import DataCurves
 from recognition.surfaces.database import DATABASE_FORMAT, ModelDatabase
@@ -54,6 +54,7 @@ __all__ = [
     "InvalidModel",
     "MeshModelConfig",
     "ModelDatabase",
+    "NoReading",
     "NoRealSolution",
     "NoiseModel",
     "Recognition",

@@ -67,6 +67,8 @@ def show(s: dict[str, Any]) -> None:
         print(f"confidence after the sweeps: {s['confidence']:.3f} ({s['belief_best']})")
         for k, made in enumerate(t["made"], 1):
             met = "contact" if made["contact"] else "no contact"
+            if made.get("no_reading"):
+                met = f"no reading ({made['no_reading']})"
             print(
                 f"  touch {k}: {met}; best {made['best']}, confidence {made['confidence']:.3f} "
                 f"({made['recognition_time_s']:.2f} s planning and update)"

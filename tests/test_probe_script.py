@@ -64,12 +64,13 @@ def test_a_model_error_is_probed_reported_and_written_to_the_summary(
 
     probe = load_script("probe")
     summary_path = tmp_path / "summary.json"
-    args = ["--object", "cat", "--model-error-mm", "0.1", "--rerun", "off"]
+    args = ["--object", "cat", "--model-error-mm", "0.1", "--rerun", "off", "--touches", "0"]
     config = probe.parse_args([*args, "--out", str(tmp_path), "--json", str(summary_path)])
     summary = probe.run(config)
     error = summary["model_error_mm"]
     assert error["requested_rms"] == 0.1 and error["achieved_rms"] == pytest.approx(0.1, rel=0.1)
-    assert summary["recognized"] == "cat" and summary["location_error_mm"] < 1.0
+    # the curves alone name the cat; where on it they leave uncertain (the next test)
+    assert summary["recognized"] == "cat" and summary["confidence"] < 0.99
     assert json.loads(summary_path.read_text())["model_error_mm"] == error
     assert "model error: the object lies" in capsys.readouterr().out
 
@@ -79,7 +80,7 @@ def test_touches_resolve_a_session_the_sweeps_leave_unsure(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     probe = load_script("probe")
-    args = ["--object", "fish", "--seed", "1", "--model-error-mm", "0.1"]
+    args = ["--object", "cat", "--seed", "0", "--model-error-mm", "0.1"]
     summary = probe.run(probe.parse_args([*args, "--out", str(tmp_path)]))
     # the three curves put p 1.6 mm off and are not sure of it; the touches are
     assert summary["location_error_mm"] > 1.0 and summary["confidence"] < 0.99

@@ -165,6 +165,7 @@ def _touched(
     best = done.belief.best
     return {
         "made": len(done.steps),
+        "no_readings": sum(step.no_reading is not None for step in done.steps),
         "stop": done.stop,
         "recognized": None if best is None else best.model,
         "success": best is not None and best.model == true_model,

@@ -29,7 +29,7 @@ from recognition.surfaces.belief import Belief
 from recognition.surfaces.database import ModelDatabase
 from recognition.surfaces.touch_planning import TouchLimits, TouchPlan
 
-__all__ = ["BROADEN_AT", "Contact", "TouchStep", "Verification", "verify"]
+__all__ = ["BROADEN_AT", "Contact", "NoReading", "TouchStep", "Verification", "verify"]
 
 Array = NDArray[np.float64]
 
@@ -55,6 +55,21 @@ class Contact:
 
 
 @dataclass(frozen=True)
+class NoReading:
+    """What a touch that met something returns when its reading is not the tip's contact
+    (e.g. the force ran across the stylus: its shaft, not its tip, touched): the belief
+    is not updated.
+
+    Attributes
+    ----------
+    reason : str
+        What the sensor saw, in words.
+    """
+
+    reason: str
+
+
+@dataclass(frozen=True)
 class TouchStep:
     """One verification touch.
 
@@ -62,7 +77,8 @@ class TouchStep:
     ----------
     plan : TouchPlan
     contact : (3,) float or None
-        The sensed contact point, data frame, metres (None: nothing met within the travel).
+        The sensed contact point, data frame, metres (None: nothing met within the travel,
+        or no reading, see ``no_reading``).
     normal : (3,) float or None
         The sensed outward normal there, data frame (None: none sensed).
     confidence : float
@@ -73,6 +89,9 @@ class TouchStep:
         Planning and updating, seconds (the touch itself excluded).
     belief : Belief
         The belief after the update.
+    no_reading : str or None
+        Why the touch gave no contact to trust (:class:`NoReading`; the belief was not
+        updated); None: it gave one, or met nothing.
     """
 
     plan: TouchPlan
@@ -82,6 +101,7 @@ class TouchStep:
     recognition_time_s: float
     belief: Belief
     normal: Array | None = None
+    no_reading: str | None = None
 
 
 @dataclass(frozen=True)
@@ -111,7 +131,7 @@ class Verification:
 def verify(
     database: ModelDatabase,
     belief: Belief,
-    touch: Callable[[TouchPlan], Contact | Array | None],
+    touch: Callable[[TouchPlan], Contact | NoReading | Array | None],
     limits: TouchLimits,
     *,
     max_touches: int = 5,
@@ -127,8 +147,9 @@ def verify(
     belief : Belief
         After the curves (:attr:`Recognition.belief`).
     touch : callable
-        ``touch(plan) -> Contact`` (or its (3,) point alone) in the data frame, or None
-        (no contact within ``plan.travel_m`` of ``plan.start`` along ``plan.direction``).
+        ``touch(plan) -> Contact`` (or its (3,) point alone) in the data frame, None (no
+        contact within ``plan.travel_m`` of ``plan.start`` along ``plan.direction``), or
+        :class:`NoReading` (a contact, but not one of the tip to trust).
     limits : TouchLimits
     max_touches : int
         At most this many touches (0: none, the thesis's behaviour).
@@ -145,6 +166,7 @@ def verify(
     steps: list[TouchStep] = []
     stop = "touches spent"
     broaden_s = 0.0
+    avoid = np.zeros((0, 3))  # where touches gave no reading: none is planned near them
     for k in range(max_touches + 1):
         if belief.confidence >= confidence:
             stop = "sure"
@@ -158,12 +180,27 @@ def verify(
             if belief.confidence >= confidence:
                 stop = "sure"
                 break
-        plan = database.plan_touch(belief, limits, seed=seed + k)
+        plan = database.plan_touch(belief, limits, seed=seed + k, avoid=avoid)
         planned = time.perf_counter() - start
         if plan is None:
             stop = "no informative touch"
             break
         sensed = touch(plan)
+        if isinstance(sensed, NoReading):
+            avoid = np.concatenate([avoid, plan.point[None]])
+            best = belief.best
+            steps.append(
+                TouchStep(
+                    plan,
+                    None,
+                    belief.confidence,
+                    None if best is None else best.model,
+                    planned,
+                    belief,
+                    no_reading=sensed.reason,
+                )
+            )
+            continue
         start = time.perf_counter()
         contact = sensed if sensed is None or isinstance(sensed, Contact) else Contact(sensed)
         if contact is None:

@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 import trimesh
+from numpy.typing import ArrayLike
 
 from recognition.errors import InvalidArgument, InvalidCurveData, InvalidModel
 from recognition.surfaces.belief import Belief, BeliefConfig, curve_points
@@ -307,13 +308,17 @@ class ModelDatabase:
             poses += [(r.model, r.poses[k]) for k in kept]
         return belief.with_poses(self.models, poses)
 
-    def plan_touch(self, belief: Belief, limits: TouchLimits, seed: int = 0) -> TouchPlan | None:
-        """The next touch of greatest expected information gain, or None
-        (:func:`recognition.surfaces.touch_planning.plan_touch`)."""
+    def plan_touch(
+        self, belief: Belief, limits: TouchLimits, seed: int = 0, avoid: ArrayLike | None = None
+    ) -> TouchPlan | None:
+        """The next touch of greatest expected information gain, none near the points
+        ``avoid`` (k, 3), or None (:func:`recognition.surfaces.touch_planning.plan_touch`)."""
         from recognition.surfaces.touch_planning import plan_touch
 
         field_of = {n: i for i, n in enumerate(self.names)}
-        return plan_touch(belief, self.models, self.field_stack, field_of, limits, seed=seed)
+        return plan_touch(
+            belief, self.models, self.field_stack, field_of, limits, seed=seed, avoid=avoid
+        )
 
     def _checked_selection(
         self, curves: object, models: list[str] | None, max_error_m: float

@@ -27,7 +27,7 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import cKDTree
 
 from recognition.errors import InvalidArgument
@@ -225,10 +225,15 @@ def information_gain(
 
 
 def _candidates(
-    belief: Belief, models: Mapping[str, MeshModel], limits: TouchLimits, rng: np.random.Generator
+    belief: Belief,
+    models: Mapping[str, MeshModel],
+    limits: TouchLimits,
+    rng: np.random.Generator,
+    made: Array,
 ) -> tuple[Array, Array]:
     """Candidate touch points (k, 3) and outward normals (k, 3), data frame: vertices of the
-    most probable hypotheses' models placed by their poses, within the limits."""
+    most probable hypotheses' models placed by their poses, within the limits and no
+    nearer than ``limits.min_separation_m`` to the points ``made`` (m, 3)."""
     top = [h for h in belief.hypotheses[:4] if h.posterior >= 0.01] or list(belief.hypotheses[:1])
     share = limits.candidates // len(top)
     points, normals = [], []
@@ -242,7 +247,7 @@ def _candidates(
     keep = N @ limits.up >= np.cos(limits.max_tilt_rad)
     keep &= P @ limits.up >= limits.min_height_m
     if keep.any():
-        near, _ = cKDTree(belief.points).query(P[keep])
+        near, _ = cKDTree(made).query(P[keep])
         keep[np.flatnonzero(keep)[near < limits.min_separation_m]] = False
     return P[keep], N[keep]
 
@@ -312,17 +317,23 @@ def plan_touch(
     limits: TouchLimits,
     *,
     seed: int = 0,
+    avoid: ArrayLike | None = None,
 ) -> TouchPlan | None:
     """The touch of greatest expected information gain (module docstring), or None when
     no candidate is allowed or none can tell the hypotheses apart.
 
     ``stack`` holds the models' distance fields, ``field_of`` maps a model name to its
-    field in it. Same belief and seed, same plan.
+    field in it. No touch is planned within ``limits.min_separation_m`` of contact made
+    or of the points ``avoid`` (k, 3) (touches that gave no reading). Same belief, seed
+    and ``avoid``, same plan.
     """
     if not belief.hypotheses:
         return None
     rng = np.random.default_rng(seed)
-    P, N = _candidates(belief, models, limits, rng)
+    near = belief.points
+    if avoid is not None:
+        near = np.concatenate([near, np.asarray(avoid, dtype=np.float64).reshape(-1, 3)])
+    P, N = _candidates(belief, models, limits, rng, near)
     if not len(P):
         return None
     directions = -N

@@ -262,7 +262,8 @@ def _touch_summary(touched: Any, name: str, point_in_object: np.ndarray) -> dict
             {
                 "confidence": t.confidence,
                 "best": t.best_model,
-                "contact": t.point_in_world is not None,
+                "contact": t.point_in_world is not None and t.no_reading is None,
+                "no_reading": t.no_reading,
                 "recognition_time_s": t.recognition_time_s,
                 "robot_time_s": t.robot_time_s,
             }

@@ -7,7 +7,9 @@ makes one guarded approach along the planned direction
 (:meth:`tactile_sim.probing.rig.Rig.approach`); the sensed contact point (or nothing
 within the travel) updates every hypothesis. Touches are planned on the object's free
 surface within the stylus's tilt limit, clear of the table, and where the arm reaches
-both ends of the approach.
+both ends of the approach. A reading whose force runs far more across the stylus than any
+surface allowed to a touch would press it is the shaft's, not the tip's: it is not used
+(:class:`recognition.NoReading`).
 """
 
 from __future__ import annotations
@@ -24,6 +26,7 @@ from recognition import (
     Contact,
     ModelDatabase,
     NoiseModel,
+    NoReading,
     Recognition,
     RegistrationConfig,
     TouchLimits,
@@ -36,7 +39,14 @@ from tactile_sim.kinematics import COBRA600, inverse_kinematics
 from tactile_sim.probing.session import ProbeSession
 from tactile_sim.trajectory import Trajectory
 
-__all__ = ["RobotToucher", "TouchRecord", "TouchSession", "touch_limits", "touch_until_sure"]
+__all__ = [
+    "RobotToucher",
+    "TouchRecord",
+    "TouchSession",
+    "shaft_reading",
+    "touch_limits",
+    "touch_until_sure",
+]
 
 Array = NDArray[np.float64]
 
@@ -44,6 +54,11 @@ Array = NDArray[np.float64]
 TABLE_CLEARANCE_M = 5.0e-3
 #: Largest tilt of a touched surface from vertical, degrees (within the sweeps' limit).
 TOUCH_TILT_DEG = 60.0
+#: A reading whose sensed normal tilts this much more than that from vertical is the
+#: shaft's: the tip pressed on a surface within the limit pushes the stylus along its axis
+#: too, the shaft is pushed across it (over 30 sessions with 0.1 mm model error, the tip's
+#: readings tilted at most 70 degrees, the shaft's 83-93).
+SHAFT_READING_MARGIN_DEG = 20.0
 #: The stylus shaft's collision radius (``scenes/joystick_probe.xml``), metres ...
 STYLUS_RADIUS_M = 0.8e-3
 #: ... checked for clearance this far above the tip (the housing sits higher than any
@@ -64,6 +79,8 @@ class TouchRecord:
         Sensed outward normal.
     true_contact_in_world : (3,) float or None
         Ground truth: where MuJoCo's contact met the object (None without a contact).
+    no_reading : str or None
+        Why the reading was not used (the shaft touched); None: it was, or nothing met.
     confidence : float
         Confidence after the update.
     best_model : str or None
@@ -84,6 +101,7 @@ class TouchRecord:
     recognition_time_s: float
     robot_time_s: float
     sim_time_s: float
+    no_reading: str | None = None
 
 
 @dataclass(frozen=True)
@@ -109,6 +127,16 @@ class TouchSession:
     touches: tuple[TouchRecord, ...]
     wall_seconds: float
     trajectory: Trajectory | None = None
+
+
+def shaft_reading(normal_in_world: Array) -> str | None:
+    """Why a reading whose sensed outward normal (world frame, unit) is ``normal_in_world``
+    is the shaft's, not the tip's (it tilts more than ``SHAFT_READING_MARGIN_DEG`` beyond
+    the touches' tilt limit from vertical); None: it may be the tip's."""
+    tilt = math.degrees(math.acos(max(-1.0, min(1.0, float(normal_in_world[2])))))
+    if tilt <= TOUCH_TILT_DEG + SHAFT_READING_MARGIN_DEG:
+        return None
+    return f"the force ran {tilt:.0f} deg from the stylus's axis: the shaft touched"
 
 
 def touch_limits(session: ProbeSession) -> TouchLimits:
@@ -198,8 +226,9 @@ def touch_until_sure(
             step.recognition_time_s,
             seconds,
             sim_time,
+            no_reading,
         )
-        for step, (point, normal, truth, seconds, sim_time) in zip(
+        for step, (point, normal, truth, seconds, sim_time, no_reading) in zip(
             verification.steps, toucher.made, strict=True
         )
     )
@@ -217,7 +246,8 @@ class RobotToucher:
     """The rig of a fresh session as the touch of :func:`recognition.verify`: retreat to
     the travel height, over the approach's start, down to it, one guarded approach along
     the planned direction. ``made`` keeps each touch's sensed point and normal, MuJoCo's
-    contact (None without one) and the wall time taken.
+    contact (None without one), the wall and simulated time taken, and why the reading
+    was not used (None: it was).
 
     Raises
     ------
@@ -230,11 +260,14 @@ class RobotToucher:
             raise SimulationError("the session's rig is gone: touches need a fresh probe_object")
         self.runner = session.runner
         self.limits = touch_limits(session)
-        self.made: list[tuple[Array | None, Array | None, Array | None, float, float]] = []
+        self.made: list[
+            tuple[Array | None, Array | None, Array | None, float, float, str | None]
+        ] = []
 
-    def __call__(self, plan: TouchPlan) -> Contact | None:
+    def __call__(self, plan: TouchPlan) -> Contact | NoReading | None:
         """The sensed contact of the planned touch (None: nothing within its travel); its
-        normal when the reading's force gave one."""
+        normal when the reading's force gave one; :class:`NoReading` when that force ran
+        across the stylus (``SHAFT_READING_MARGIN_DEG`` beyond the touches' tilt limit)."""
         runner = self.runner
         began = time.perf_counter()
         runner.retreat()
@@ -242,7 +275,7 @@ class RobotToucher:
         estimate = runner.rig.approach(plan.start, plan.direction, plan.travel_m)
         if estimate is None:
             sim_time = float(runner.rig.data.time)
-            self.made.append((None, None, None, time.perf_counter() - began, sim_time))
+            self.made.append((None, None, None, time.perf_counter() - began, sim_time, None))
             return None
         sample = runner.sample(estimate)
         touched = sample.touched if np.all(np.isfinite(sample.touched)) else None
@@ -252,6 +285,7 @@ class RobotToucher:
         # off the true one: a point a radius ahead along it lay up to 0.19 mm off the
         # surface (p90 0.075 mm), the sensed one within 0.003 mm (median 0.0005).
         point = estimate.point_in_world
+        no_reading = shaft_reading(estimate.normal_in_world) if estimate.normal_from_force else None
         self.made.append(
             (
                 point,
@@ -259,6 +293,9 @@ class RobotToucher:
                 touched,
                 time.perf_counter() - began,
                 estimate.reading.time_s,
+                no_reading,
             )
         )
+        if no_reading is not None:
+            return NoReading(no_reading)
         return Contact(point, estimate.normal_in_world if estimate.normal_from_force else None)

@@ -457,11 +457,13 @@ def _log_touches(
                     [touch.point_in_world],
                     colors=[_CONTACT_COLOR],
                     radii=[0.6e-3],
-                    labels=[f"touch {k}"],
+                    labels=[f"touch {k}" + (" (not used)" if touch.no_reading else "")],
                 ),
                 static=True,
             )
         met = "contact" if touch.point_in_world is not None else "no contact"
+        if touch.no_reading is not None:
+            met = "no reading: the shaft touched"
         if database is not None:
             _log_hypotheses(rec, step.belief, database, f"touch {k} ({met})")
 

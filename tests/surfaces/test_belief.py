@@ -12,6 +12,7 @@ from recognition import (
     InvalidArgument,
     ModelDatabase,
     NoiseModel,
+    NoReading,
     TouchLimits,
     verify,
 )
@@ -208,6 +209,38 @@ def test_verification_takes_the_touchs_normal_when_the_sensor_gives_one(database
     made = [step for step in done.steps if step.contact is not None]
     assert made and all(step.normal is not None for step in made)
     assert np.all(np.isfinite(done.belief.normals)) and len(done.belief.normals) == len(made)
+
+
+def test_a_touch_with_no_reading_leaves_the_belief_and_is_not_planned_again(database):
+    model = database["ellipsoid"]
+    vertex = int(np.argmax(model.vertices[:, 2]))
+    synthetic = _curves(model, vertex, seed=3, noise=0.002e-3, n_points=11, spacing_m=0.3e-3)
+    result = database.recognize(
+        synthetic.curves,
+        models=["ellipsoid", "larger_ellipsoid"],
+        noise=NoiseModel(model_mismatch_m=0.02e-3),
+    )
+    calls = []
+
+    def touch(plan):
+        calls.append(plan)
+        if len(calls) == 1:
+            return NoReading("the shaft touched")
+        return ray_contact(
+            model.distance, synthetic.T_model_from_data, plan.start, plan.direction, 0.02
+        )
+
+    limits = _limits(synthetic)
+    done = verify(database, result.belief, touch, limits, max_touches=3)
+    first = done.steps[0]
+    assert first.no_reading == "the shaft touched" and first.contact is None
+    assert first.belief is result.belief  # nothing was learnt from it
+    assert len(done.steps) == len(calls) >= 2
+    later = np.array([step.plan.point for step in done.steps[1:]])
+    assert np.linalg.norm(later - first.plan.point, axis=1).min() >= limits.min_separation_m
+    # the same belief, seed and avoided point plan the same touch again
+    again = database.plan_touch(result.belief, limits, seed=1, avoid=first.plan.point[None])
+    np.testing.assert_array_equal(again.point, done.steps[1].plan.point)
 
 
 def test_none_of_these_spreads_a_touch_over_the_planned_approach():

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import trimesh
 
-from recognition import DataCurves, TouchPlan
+from recognition import DataCurves, NoReading, TouchPlan
 from recognition.rigid import pose_matrix
 from tactile_sim.errors import (
     SimulationError,
@@ -17,7 +17,7 @@ from tactile_sim.errors import (
 )
 from tactile_sim.probing import ProbeScene, StopReason, build_probe_scene, probe_object
 from tactile_sim.probing.placement import MOUNT_IN_WORLD
-from tactile_sim.probing.touches import RobotToucher
+from tactile_sim.probing.touches import RobotToucher, shaft_reading
 
 AT_MOUNT = pose_matrix(np.eye(3), MOUNT_IN_WORLD)
 """T_world_from_object: upright on the object mount, axes parallel to the world's."""
@@ -176,3 +176,26 @@ def test_a_robot_touch_off_the_surface_normal_reports_a_point_on_the_surface_and
     # the sphere's normal there, not the approach's 12 degrees off
     radial = (contact.point - centre) / np.linalg.norm(contact.point - centre)
     assert np.degrees(np.arccos(np.clip(contact.normal @ radial, -1.0, 1.0))) < 2.0
+
+
+def test_a_touch_under_an_overhang_meets_the_shaft_first_and_gives_no_reading(
+    sphere_scene: ProbeScene,
+) -> None:
+    session = probe_object(
+        "sphere", seed=11, n_points=9, probe_scene=sphere_scene, first_plane_yaw_rad=0.2
+    )
+    centre = session.ground_truth.T_world_from_object[:3, 3] + [0.0, 0.0, 0.033]
+    below = np.radians(110.0)  # 20 degrees below the equator: the sphere overhangs the tip
+    outward = np.array([np.sin(below), 0.0, np.cos(below)])
+    point = centre + 0.033 * outward
+    plan = TouchPlan(point, -outward, point + 4e-3 * outward, 10e-3, 1.0, np.zeros(1))
+    toucher = RobotToucher(session)
+    reading = toucher(plan)
+    assert isinstance(reading, NoReading) and "shaft" in reading.reason
+    assert toucher.made[-1][2] is None  # MuJoCo: the tip touched nothing
+
+
+@pytest.mark.parametrize(("tilt_deg", "shaft"), [(0, False), (60, False), (78, False), (85, True)])
+def test_a_reading_is_the_shafts_when_its_force_runs_across_the_stylus(tilt_deg, shaft) -> None:
+    tilt = np.radians(tilt_deg)
+    assert (shaft_reading(np.array([np.sin(tilt), 0.0, np.cos(tilt)])) is not None) is shaft
