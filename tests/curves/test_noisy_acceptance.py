@@ -13,8 +13,8 @@ q the margin a class must beat (for a member chi2(1) at the significance, by whi
 class with one parameter more must fit better; for a non-member the chi2(n - 6)
 quantile's excess over its mean, by which a fit is refused). Measured on 50 curves per
 kind (seed 11): parabola, ellipse, hyperbola and cubical parabola 50 of 50; semi-cubical
-parabola 31 (48 of its 50 arcs are within 0.42 noise sd of an ellipse arc, so no test can
-tell them apart); cubic spline 46 (45 of the 45 separable); quartic 49 (49 of 49);
+parabola 32 (48 of its 50 arcs are within 0.42 noise sd of a parabola or an ellipse arc,
+so no test can tell them apart); cubic spline 46 (45 of the 45 separable); quartic 49 (49 of 49);
 sinusoid 21 left unclassified (20 of the 21 separable: the other 29 lie within 0.93 noise
 sd of a cubic spline).
 """

@@ -1,6 +1,8 @@
 """Every class fitted to sampled points by orthogonal distance regression (point_fit), and
 recognize_points deciding on those fits."""
 
+import copy
+
 import numpy as np
 import pytest
 
@@ -111,3 +113,21 @@ def test_recognize_points_refuses_mixed_decisions() -> None:
         recognize_points(points, decide_by="pointz")
     with pytest.raises(InvalidCurveData, match="noise"):
         recognize_points(points, noise=-1.0)
+
+
+def test_a_semicubical_arc_that_runs_up_to_its_cusp_is_fitted_exactly() -> None:
+    """The joystick generator's 15th semi-cubical arc of seed 11 ends next to its cusp
+    (where the speed falls to a tenth of its median): started from the chord length,
+    its fit ended 61 noise variances from the noise-free points, worse than an ellipse's."""
+    from testing_curves import joystick_samples, random_curve
+
+    rng = np.random.default_rng(11)
+    for _ in range(15):
+        curve = random_curve("semicubical_parabola", rng)
+        twin = copy.deepcopy(rng)  # the same arc without its noise
+        joystick_samples(curve, rng)
+    points = joystick_samples(curve, twin, noise=0.0)
+    fits = pf.fit_classes(points)
+    own = fits[CurveKind.SEMICUBICAL_PARABOLA]
+    assert own is not None and np.sqrt(own.sum_of_squares / len(points)) < 1e-6
+    assert fits[CurveKind.ELLIPSE].sum_of_squares > 1e3 * own.sum_of_squares

@@ -87,6 +87,9 @@ CORRECTION_ROUNDS = 20
 #: of its local minima that start the fit.
 BETA_GRID = np.sinh(np.linspace(-4.0, 4.0, 161))
 BETA_STARTS = 4
+#: Gaps between the points' end and a cusp beyond it, in arc lengths, that start the
+#: semi-cubical parabola's fit too (:func:`_cusp_starts`).
+CUSP_GAPS = (0.0, 0.1)
 
 _J = np.array([[0.0, -1.0], [1.0, 0.0]])
 _POLYNOMIAL = (
@@ -285,6 +288,20 @@ def _solve(
     return result.state[0][best], result.state[1][best]
 
 
+def _better(
+    kind: CurveKind,
+    a: tuple[np.ndarray, np.ndarray] | None,
+    b: tuple[np.ndarray, np.ndarray] | None,
+    points: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray] | None:
+    """Of two fits of ``kind`` (either may be None), the one of least squared distance."""
+    fits = [f for f in (a, b) if f is not None]
+    if len(fits) < 2:
+        return fits[0] if fits else None
+    costs = [float(np.sum(_residuals(kind, g[None], u[None], points)[0] ** 2)) for g, u in fits]
+    return fits[int(np.argmin(costs))]
+
+
 def _chord_parameter(points: np.ndarray) -> np.ndarray:
     """Cumulative chord length, scaled to [-1, 1]."""
     s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(points, axis=0), axis=1))])
@@ -336,6 +353,26 @@ def _special_point_starts(
     )
     best = candidates[np.argsort(costs[candidates])][:BETA_STARTS]
     return np.array([rows[i][1] for i in best]), np.repeat(t[None], best.size, axis=0)
+
+
+def _cusp_starts(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Starting unknowns (S, 7) and parameters (S, n) of the semi-cubical parabola with
+    its cusp just beyond either end of the points: the speed vanishes at a cusp, so the
+    arc length from it grows as the square of the parameter, and the parameter is
+    sqrt(arc length from the cusp) (scaled to at most 1). An arc that runs up to a cusp
+    is parameterised far from its chord length there, and the fits started from the
+    chord length end in a local minimum (a noise-free arc left 61 noise variances)."""
+    s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(points, axis=0), axis=1))])
+    starts, params = [], []
+    for from_cusp in (s, s[-1] - s):
+        for gap in CUSP_GAPS:
+            t = np.sqrt(from_cusp + gap * s[-1])
+            t /= t.max()
+            V = _constrained_basis(CurveKind.SEMICUBICAL_PARABOLA, t, 0.0)
+            coef = np.linalg.lstsq(V, points, rcond=None)[0]
+            starts.append([*coef.ravel(), 0.0])
+            params.append(t)
+    return np.array(starts), np.array(params)
 
 
 def _constrained_basis(kind: CurveKind, t: np.ndarray, beta: float) -> np.ndarray:
@@ -495,7 +532,8 @@ def fit_classes(points: ArrayLike) -> dict[CurveKind, PointFit | None]:
     Starts: the conics from the algebraic conic fit; the parabola and a first cubic
     spline from parametric polynomials fitted by parameter correction; the cubical and
     semi-cubical parabolas from the best special points at that spline's parameters
-    (:func:`_special_point_starts`); the cubic spline, which holds every polynomial class,
+    (:func:`_special_point_starts`), the semi-cubical parabola also from a cusp just
+    beyond either end (:func:`_cusp_starts`); the cubic spline, which holds every polynomial class,
     from its first fit and from the other polynomial classes' fits, so that it fits at
     least as well as each of them.
     """
@@ -516,6 +554,13 @@ def fit_classes(points: ArrayLike) -> dict[CurveKind, PointFit | None]:
     for kind in (CurveKind.CUBICAL_PARABOLA, CurveKind.SEMICUBICAL_PARABOLA):
         g, u = _special_point_starts(kind, q, t, c)
         solved[kind] = _solve(kind, g, u, q)
+    # apart, so that the screen of the special points' starts cannot drop them
+    solved[CurveKind.SEMICUBICAL_PARABOLA] = _better(
+        CurveKind.SEMICUBICAL_PARABOLA,
+        solved[CurveKind.SEMICUBICAL_PARABOLA],
+        _solve(CurveKind.SEMICUBICAL_PARABOLA, *_cusp_starts(q), q),
+        q,
+    )
     starts = [(c.reshape(8), t)]
     for kind in (CurveKind.PARABOLA, CurveKind.CUBICAL_PARABOLA, CurveKind.SEMICUBICAL_PARABOLA):
         done = solved[kind]
