@@ -7,7 +7,8 @@ with the surface normal when the sensor gives one), refine and re-score every hy
 with all the contact (:meth:`Belief.with_contacts`). When no hypothesis explains the
 contact any more, or when a touch has made the belief sure, the curves and the touches'
 contact points are searched again more broadly
-(:meth:`~recognition.surfaces.database.ModelDatabase.broaden`, at most once per touch):
+(:meth:`~recognition.surfaces.database.ModelDatabase.broaden`, at most once per touch,
+after the last touch too):
 poses the first search never proposed, but which fit all the contact as well, compete
 before an answer is called sure. It stops once the belief's confidence
 (:attr:`Belief.confidence`) reaches ``confidence``, the touches are spent, or no allowed
@@ -171,15 +172,16 @@ def verify(
         if belief.confidence >= confidence:
             stop = "sure"
             break
-        if k == max_touches:
-            break
         start = time.perf_counter()
-        if belief.unexplained >= BROADEN_AT:  # (broaden: once per touch)
+        # (broaden: once per touch; after the last touch too, never without touches)
+        if belief.unexplained >= BROADEN_AT and (k < max_touches or steps):
             belief = database.broaden(belief)
             broaden_s += time.perf_counter() - start
             if belief.confidence >= confidence:
                 stop = "sure"
                 break
+        if k == max_touches:
+            break
         plan = database.plan_touch(belief, limits, seed=seed + k, avoid=avoid)
         planned = time.perf_counter() - start
         if plan is None:

@@ -243,6 +243,24 @@ def test_a_touch_with_no_reading_leaves_the_belief_and_is_not_planned_again(data
     np.testing.assert_array_equal(again.point, done.steps[1].plan.point)
 
 
+def test_a_last_touch_that_nothing_explains_has_a_broader_search_after_it(database):
+    synthetic = _curves(
+        database["blob"], 2500, seed=2, noise=0.002e-3, n_points=21, spacing_m=0.6e-3
+    )
+    result = database.recognize(synthetic.curves, models=["blob"])
+
+    def touch(plan):  # 3 mm beyond where the hypotheses put the surface
+        return plan.start + (plan.depths_m[0] + 3e-3) * plan.direction
+
+    limits = _limits(synthetic)
+    done = verify(database, result.belief, touch, limits, max_touches=1, confidence=1.0)
+    assert len(done.steps) == 1 and done.steps[0].belief.unexplained >= 0.5
+    assert done.steps[0].belief.broadened is None
+    assert done.belief.broadened == 1 and done.broaden_s > 0  # searched again after it
+    untouched = verify(database, result.belief, touch, limits, max_touches=0, confidence=1.0)
+    assert untouched.belief is result.belief  # no touch, no search
+
+
 def test_none_of_these_spreads_a_touch_over_the_planned_approach():
     assert BeliefConfig().touch_window_m == TouchLimits(up=np.array([0.0, 0.0, 1.0])).depth_m
 
