@@ -76,15 +76,22 @@ def test_a_sphere_leaves_p_free_so_the_answer_is_not_sure(database):
     assert result.confidence < 0.5
 
 
-def test_touches_tell_two_similar_models_apart(database):
+def _the_ellipsoids_top(database):
+    """The ellipsoid's top, where it and the 4 % larger one look alike: the model, curves
+    of 11 points there and their recognition against the two (not sure)."""
     model = database["ellipsoid"]
-    vertex = int(np.argmax(model.vertices[:, 2]))  # the top, where both ellipsoids look alike
+    vertex = int(np.argmax(model.vertices[:, 2]))
     synthetic = _curves(model, vertex, seed=3, noise=0.002e-3, n_points=11, spacing_m=0.3e-3)
     result = database.recognize(
         synthetic.curves,
         models=["ellipsoid", "larger_ellipsoid"],
         noise=NoiseModel(model_mismatch_m=0.02e-3),
     )
+    return model, synthetic, result
+
+
+def test_touches_tell_two_similar_models_apart(database):
+    model, synthetic, result = _the_ellipsoids_top(database)
     assert result.confidence < 0.99
     rng = np.random.default_rng(0)
 
@@ -184,14 +191,7 @@ def test_a_touchs_sensed_normal_counts_by_how_far_it_tilts_from_the_hypothesis(d
 
 
 def test_verification_takes_the_touchs_normal_when_the_sensor_gives_one(database):
-    model = database["ellipsoid"]
-    vertex = int(np.argmax(model.vertices[:, 2]))
-    synthetic = _curves(model, vertex, seed=3, noise=0.002e-3, n_points=11, spacing_m=0.3e-3)
-    result = database.recognize(
-        synthetic.curves,
-        models=["ellipsoid", "larger_ellipsoid"],
-        noise=NoiseModel(model_mismatch_m=0.02e-3),
-    )
+    model, synthetic, result = _the_ellipsoids_top(database)
     data_from_model = np.linalg.inv(synthetic.T_model_from_data)
 
     def touch(plan):
@@ -212,14 +212,7 @@ def test_verification_takes_the_touchs_normal_when_the_sensor_gives_one(database
 
 
 def test_a_touch_with_no_reading_leaves_the_belief_and_is_not_planned_again(database):
-    model = database["ellipsoid"]
-    vertex = int(np.argmax(model.vertices[:, 2]))
-    synthetic = _curves(model, vertex, seed=3, noise=0.002e-3, n_points=11, spacing_m=0.3e-3)
-    result = database.recognize(
-        synthetic.curves,
-        models=["ellipsoid", "larger_ellipsoid"],
-        noise=NoiseModel(model_mismatch_m=0.02e-3),
-    )
+    model, synthetic, result = _the_ellipsoids_top(database)
     calls = []
 
     def touch(plan):

@@ -15,7 +15,13 @@ from tactile_sim.errors import (
     UnusableCurves,
     WorkspaceLimit,
 )
-from tactile_sim.probing import ProbeScene, StopReason, build_probe_scene, probe_object
+from tactile_sim.probing import (
+    ProbeScene,
+    ProbeSession,
+    StopReason,
+    build_probe_scene,
+    probe_object,
+)
 from tactile_sim.probing.placement import MOUNT_IN_WORLD
 from tactile_sim.probing.touches import RobotToucher, shaft_reading
 
@@ -156,13 +162,18 @@ def test_curves_recognition_cannot_use_are_replanned_or_named() -> None:
         probe_object("sphere", seed=seed, point=p, **settings)
 
 
-def test_a_robot_touch_off_the_surface_normal_reports_a_point_on_the_surface_and_its_normal(
-    sphere_scene: ProbeScene,
-) -> None:
+def _sphere_session(sphere_scene: ProbeScene) -> tuple[ProbeSession, np.ndarray]:
+    """A short session on the sphere (radius 33 mm) and the sphere's centre, world frame."""
     session = probe_object(
         "sphere", seed=11, n_points=9, probe_scene=sphere_scene, first_plane_yaw_rad=0.2
     )
-    centre = session.ground_truth.T_world_from_object[:3, 3] + [0.0, 0.0, 0.033]
+    return session, session.ground_truth.T_world_from_object[:3, 3] + [0.0, 0.0, 0.033]
+
+
+def test_a_robot_touch_off_the_surface_normal_reports_a_point_on_the_surface_and_its_normal(
+    sphere_scene: ProbeScene,
+) -> None:
+    session, centre = _sphere_session(sphere_scene)
     outward = np.array([np.sin(0.5), 0.0, np.cos(0.5)])  # 29 degrees from the top
     point = centre + 0.033 * outward
     tilt = 0.21  # the approach runs 12 degrees off the inward normal
@@ -181,10 +192,7 @@ def test_a_robot_touch_off_the_surface_normal_reports_a_point_on_the_surface_and
 def test_a_touch_under_an_overhang_meets_the_shaft_first_and_gives_no_reading(
     sphere_scene: ProbeScene,
 ) -> None:
-    session = probe_object(
-        "sphere", seed=11, n_points=9, probe_scene=sphere_scene, first_plane_yaw_rad=0.2
-    )
-    centre = session.ground_truth.T_world_from_object[:3, 3] + [0.0, 0.0, 0.033]
+    session, centre = _sphere_session(sphere_scene)
     below = np.radians(110.0)  # 20 degrees below the equator: the sphere overhangs the tip
     outward = np.array([np.sin(below), 0.0, np.cos(below)])
     point = centre + 0.033 * outward
