@@ -87,7 +87,8 @@ def show(s: dict[str, Any]) -> None:
         print(f"  truncated: {message}")
     t = s["timings_s"]
     print(
-        f"timings: database {t['database']:.2f} s, probing {t['probing']:.2f} s (scene "
+        f"timings: object {t['object']:.2f} s, database {t['database']:.2f} s, probing "
+        f"{t['probing']:.2f} s (scene "
         f"{t['scene_build']:.2f} s), recognition {t['recognition']:.2f} s, touches "
         f"{t['touches']:.2f} s, total {t['total']:.2f} s"
     )

@@ -384,7 +384,7 @@ def test_sensing_experiment_measures_points_and_wall_times(tmp_path: Path) -> No
     warm = figures["probe_script_warm_s"]
     assert len(warm) == 3
     for run_ in warm:
-        parts = run_["startup"] + run_["database"] + run_["probing"] + run_["recognition"]
+        parts = sum(run_[k] for k in ("startup", "object", "database", "probing", "recognition"))
         assert 0 < parts <= run_["wall"]
     assert all(t > 0 for t in figures["session_total_s"])
     report = (tmp_path / "sim_sensing.md").read_text()

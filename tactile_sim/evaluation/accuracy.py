@@ -296,6 +296,7 @@ def session_timing(
 #: (label, key).
 SCRIPT_PARTS = (
     ("start-up and imports", "startup"),
+    ("object", "object"),
     ("database load", "database"),
     ("probing", "probing"),
     ("recognition", "recognition"),
@@ -335,7 +336,7 @@ def probe_script_seconds(
                 {
                     "wall": wall,
                     "startup": wall - timings["total"],
-                    **{k: timings[k] for k in ("database", "probing", "recognition")},
+                    **{k: timings[k] for k in ("object", "database", "probing", "recognition")},
                 }
             )
     return out

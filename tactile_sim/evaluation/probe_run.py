@@ -124,7 +124,8 @@ def probe_run(config: ProbeRunConfig) -> dict[str, Any]:
     dict
         JSON-ready: ``object``, ``seed``, ``recognized``, ``correct``, ``ranking_mm``
         (None: rejected at table lookup), ``margin_mm``, ``truncated_sweeps``,
-        ``timings_s`` (database load, probing with its scene build, recognition, total),
+        ``timings_s`` (the object's meshes, displaced by the model error if any, the
+        database load, probing with its scene build, recognition, total),
         ``outliers`` (indices of the points recognition rejected), ``model_error_mm``
         (requested and achieved RMS, correlation; with a model error),
         ``location_error_mm`` (from where the data's p lies on the object),
@@ -163,6 +164,7 @@ def probe_run(config: ProbeRunConfig) -> dict[str, Any]:
     target, report = _target(config)
     target = displaced_target(target, displacement)
     name = target.name
+    prepared = time.perf_counter()
     database = _database(config, target, report)
     loaded = time.perf_counter()
     session = probe_object(
@@ -199,7 +201,8 @@ def probe_run(config: ProbeRunConfig) -> dict[str, Any]:
         "margin_mm": result.margin_m * 1e3,
         "truncated_sweeps": list(session.messages),
         "timings_s": {
-            "database": loaded - start,
+            "object": prepared - start,
+            "database": loaded - prepared,
             "probing": probed - loaded,
             "scene_build": session.build_seconds,
             "recognition": recognized - probed,

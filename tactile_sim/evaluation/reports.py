@@ -389,8 +389,9 @@ def sensing_report(
             f"Simulated time per session: {float(np.median(timing.sim_seconds)):.1f} s. "
             f"The first `scripts/probe.py` run took {script_seconds[0]['wall']:.2f} s "
             "(caches already warm unless this was a fresh checkout). The script's parts: "
-            "Python start-up and imports (wall less the script's own total), the database "
-            "load, the probing session (scene build included) and recognition.",
+            "Python start-up and imports (wall less the script's own total), the object's "
+            "meshes, the database load, the probing session (scene build included) and "
+            "recognition.",
             "",
         ]
     )
