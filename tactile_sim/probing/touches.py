@@ -56,8 +56,9 @@ TABLE_CLEARANCE_M = 5.0e-3
 TOUCH_TILT_DEG = 60.0
 #: A reading whose sensed normal tilts this much more than that from vertical is the
 #: shaft's: the tip pressed on a surface within the limit pushes the stylus along its axis
-#: too, the shaft is pushed across it (over 30 sessions with 0.1 mm model error, the tip's
-#: readings tilted at most 70 degrees, the shaft's 83-93).
+#: too, the shaft is pushed across it (over 30 sessions with 0.1 mm model error, 69 tip
+#: readings tilted at most 77 degrees, the readings without the tip's contact 83-90; a tip
+#: reading refused is a touch lost, a shaft's used a point up to millimetres off).
 SHAFT_READING_MARGIN_DEG = 20.0
 #: The stylus shaft's collision radius (``scenes/joystick_probe.xml``), metres ...
 STYLUS_RADIUS_M = 0.8e-3
