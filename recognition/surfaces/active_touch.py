@@ -188,36 +188,28 @@ def verify(
             stop = "no informative touch"
             break
         sensed = touch(plan)
-        if isinstance(sensed, NoReading):
-            avoid = np.concatenate([avoid, plan.point[None]])
-            best = belief.best
-            steps.append(
-                TouchStep(
-                    plan,
-                    None,
-                    belief.confidence,
-                    None if best is None else best.model,
-                    planned,
-                    belief,
-                    no_reading=sensed.reason,
-                )
-            )
-            continue
         start = time.perf_counter()
-        contact = sensed if sensed is None or isinstance(sensed, Contact) else Contact(sensed)
-        if contact is None:
-            belief = database.update(belief, misses=[(plan.start, plan.direction, plan.travel_m)])
+        no_reading, contact = None, None
+        if isinstance(sensed, NoReading):
+            no_reading = sensed.reason
+            avoid = np.concatenate([avoid, plan.point[None]])
         else:
-            normal = np.full(3, np.nan) if contact.normal is None else contact.normal
-            belief = database.update(
-                belief,
-                np.asarray(contact.point, float)[None],
-                windows=[plan.travel_m],
-                normals=np.asarray(normal, float)[None],
-            )
-        if belief.confidence >= confidence:
-            # sure after a touch: first look elsewhere for poses that fit all the contact
-            belief = database.broaden(belief)
+            contact = sensed if sensed is None or isinstance(sensed, Contact) else Contact(sensed)
+            if contact is None:
+                belief = database.update(
+                    belief, misses=[(plan.start, plan.direction, plan.travel_m)]
+                )
+            else:
+                normal = np.full(3, np.nan) if contact.normal is None else contact.normal
+                belief = database.update(
+                    belief,
+                    np.asarray(contact.point, float)[None],
+                    windows=[plan.travel_m],
+                    normals=np.asarray(normal, float)[None],
+                )
+            if belief.confidence >= confidence:
+                # sure after a touch: first look elsewhere for poses that fit all the contact
+                belief = database.broaden(belief)
         best = belief.best
         steps.append(
             TouchStep(
@@ -228,6 +220,7 @@ def verify(
                 planned + time.perf_counter() - start,
                 belief,
                 None if contact is None or contact.normal is None else belief.normals[-1],
+                no_reading,
             )
         )
     return Verification(belief, tuple(steps), initial, stop, broaden_s)

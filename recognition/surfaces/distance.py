@@ -22,7 +22,7 @@ from scipy.spatial import cKDTree
 
 from recognition.rigid import cross
 
-__all__ = ["DistanceField", "MeshDistance", "folded_faces"]
+__all__ = ["DistanceField", "MeshDistance", "folded_faces", "vertex_sums"]
 
 Array = NDArray[np.float64]
 Array32 = NDArray[np.float32]
@@ -48,16 +48,21 @@ def folded_faces(vertices: Array, faces: IntArray) -> Mask:
     """
     corners = vertices[faces]
     weighted = cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    around = vertex_sums(faces, weighted, len(vertices))[faces].sum(axis=1)
+    return np.asarray(np.einsum("ij,ij->i", weighted, around) < 0.0)
+
+
+def vertex_sums(faces: IntArray, per_face: Array, n_vertices: int) -> Array:
+    """(n_vertices, 3) sum at each vertex of the vectors ``per_face`` (f, 3) of the faces
+    ``faces`` (f, 3) it is a corner of."""
     owner = faces.ravel()
-    at_vertex = np.stack(
+    return np.stack(
         [
-            np.bincount(owner, weights=np.repeat(weighted[:, k], 3), minlength=len(vertices))
+            np.bincount(owner, weights=np.repeat(per_face[:, k], 3), minlength=n_vertices)
             for k in range(3)
         ],
         axis=1,
     )
-    around = at_vertex[faces].sum(axis=1)
-    return np.asarray(np.einsum("ij,ij->i", weighted, around) < 0.0)
 
 
 @dataclass(frozen=True)

@@ -22,7 +22,7 @@ import trimesh
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import cKDTree
 
-from recognition.surfaces.distance import DistanceField, MeshDistance
+from recognition.surfaces.distance import DistanceField, MeshDistance, vertex_sums
 from recognition.surfaces.lookup import CurvatureTable
 from recognition.surfaces.mesh_repair import MeshReport, prepare_mesh
 from recognition.surfaces.rings import model_ring_descriptors
@@ -106,15 +106,7 @@ def vertex_normals(vertices: Array, faces: IntArray) -> Array:
     (n, 3) float
         Unit vertex normals.
     """
-    fn = _face_normals(vertices, faces)
-    owner = faces.ravel()
-    n = np.stack(
-        [
-            np.bincount(owner, weights=np.repeat(fn[:, k], 3), minlength=len(vertices))
-            for k in range(3)
-        ],
-        axis=1,
-    )
+    n = vertex_sums(faces, _face_normals(vertices, faces), len(vertices))
     return n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
 
 

@@ -229,11 +229,11 @@ def _candidates(
     models: Mapping[str, MeshModel],
     limits: TouchLimits,
     rng: np.random.Generator,
-    made: Array,
+    clear_of: Array,
 ) -> tuple[Array, Array]:
     """Candidate touch points (k, 3) and outward normals (k, 3), data frame: vertices of the
     most probable hypotheses' models placed by their poses, within the limits and no
-    nearer than ``limits.min_separation_m`` to the points ``made`` (m, 3)."""
+    nearer than ``limits.min_separation_m`` to the points ``clear_of`` (m, 3)."""
     top = [h for h in belief.hypotheses[:4] if h.posterior >= 0.01] or list(belief.hypotheses[:1])
     share = limits.candidates // len(top)
     points, normals = [], []
@@ -247,7 +247,7 @@ def _candidates(
     keep = N @ limits.up >= np.cos(limits.max_tilt_rad)
     keep &= P @ limits.up >= limits.min_height_m
     if keep.any():
-        near, _ = cKDTree(made).query(P[keep])
+        near, _ = cKDTree(clear_of).query(P[keep])
         keep[np.flatnonzero(keep)[near < limits.min_separation_m]] = False
     return P[keep], N[keep]
 
