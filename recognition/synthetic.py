@@ -312,36 +312,47 @@ def ray_contact(
     noise_m: float = 0.0,
     rng: np.random.Generator | None = None,
     step_m: float = 0.1e-3,
+    way_in: ArrayLike | None = None,
 ) -> Array | None:
     """A touch on a known mesh: where a probe moving along ``direction`` through
     ``start`` (data frame) first enters the mesh at the pose ``T_model_from_data``, at
     most ``travel_m`` beyond ``start``, with isotropic Gaussian noise of ``noise_m`` per
-    axis (drawn from ``rng``); None when it meets nothing. A start inside the mesh (the
-    surface nearer than predicted) gives the point where the line coming from
-    ``travel_m`` behind it entered, as a probe brought to the start would have met the
-    surface on its way. The entry is bracketed on samples ``step_m`` apart and bisected
-    to 1e-9 m.
+    axis (drawn from ``rng``); None when it meets nothing. The probe comes to ``start``
+    in a straight line from ``start + way_in`` (default: ``travel_m`` behind it along
+    ``direction``; a sensor lowered from above: a long way along its axis): a start
+    inside the mesh (the surface nearer than predicted) gives the point where the probe
+    met the surface on its way. The entry is bracketed on samples ``step_m`` apart and
+    bisected to 1e-9 m.
     """
     T = np.asarray(T_model_from_data, dtype=np.float64)
     a = np.asarray(start, dtype=np.float64)
     d = np.asarray(direction, dtype=np.float64)
     d = d / np.linalg.norm(d)
+    back = -travel_m * d if way_in is None else np.asarray(way_in, dtype=np.float64)
 
-    def signed(s: Array) -> Array:
-        X = (a + s[:, None] * d) @ T[:3, :3].T + T[:3, 3]
-        return distance.signed(X)
+    low, high = distance.vertices.min(axis=0) - step_m, distance.vertices.max(axis=0) + step_m
 
-    s = np.arange(-travel_m, travel_m + step_m / 2, step_m)
-    inside = signed(s) <= 0
+    def signed(X: Array) -> Array:
+        # exact distances within the mesh's bounding box only: outside lies outside
+        Y = X @ T[:3, :3].T + T[:3, 3]
+        near = np.all((Y >= low) & (Y <= high), axis=1)
+        out = np.full(len(Y), np.inf)
+        out[near] = distance.signed(Y[near])
+        return out
+
+    come = np.linspace(1.0, 0.0, max(int(np.ceil(np.linalg.norm(back) / step_m)), 1) + 1)
+    go = np.arange(step_m, travel_m + step_m / 2, step_m)
+    path = np.concatenate([a + come[:, None] * back, a + go[:, None] * d])
+    inside = signed(path) <= 0
     entries = np.flatnonzero(inside[1:] & ~inside[:-1]) + 1
     if not entries.size:
         return None
     first = int(entries[0])
-    lo, hi = float(s[first - 1]), float(s[first])
-    while hi - lo > 1e-9:
+    lo, hi = path[first - 1], path[first]
+    while np.linalg.norm(hi - lo) > 1e-9:
         mid = 0.5 * (lo + hi)
-        lo, hi = (lo, mid) if signed(np.array([mid]))[0] <= 0 else (mid, hi)
-    point = a + hi * d
+        lo, hi = (lo, mid) if signed(mid[None])[0] <= 0 else (mid, hi)
+    point = hi
     if noise_m > 0:
         if rng is None:
             raise InvalidCurveData("ray_contact with noise needs a random generator (rng)")

@@ -88,11 +88,16 @@ class SyntheticSource:
         along the planned approach onto the true model at the true pose, with the same
         noise (:func:`~recognition.synthetic.ray_contact`), approaching within 80 degrees
         of the curves' approach direction, and senses the normal there
-        (:func:`~recognition.synthetic.sensed_normal`, ``normal_noise_rad``)."""
+        (:func:`~recognition.synthetic.sensed_normal`, ``normal_noise_rad``). The sensor
+        is lowered to the approach's start from above the object along the curves'
+        approach: where the object is nearer than planned, it meets it on the way."""
         synthetic = make_curves(database, spec, self)
         model = database[spec.model]
         rng = _rng("touches", spec.key, spec.seed)
         normal_rng = _rng("touch normals", spec.key, spec.seed)
+        assert synthetic.curves.approach is not None  # sampled curves carry it
+        limits = TouchLimits(up=-synthetic.curves.approach, max_tilt_rad=np.deg2rad(80.0))
+        above = 2.0 * float(np.linalg.norm(np.ptp(model.vertices, axis=0)))
 
         def touch(plan: TouchPlan) -> Contact | None:
             point = ray_contact(
@@ -103,6 +108,7 @@ class SyntheticSource:
                 plan.travel_m,
                 noise_m=self.noise_std_m,
                 rng=rng,
+                way_in=above * limits.up,
             )
             if point is None or self.normal_noise_rad is None:
                 return None if point is None else Contact(point)
@@ -115,8 +121,6 @@ class SyntheticSource:
             )
             return Contact(point, normal)
 
-        assert synthetic.curves.approach is not None  # sampled curves carry it
-        limits = TouchLimits(up=-synthetic.curves.approach, max_tilt_rad=np.deg2rad(80.0))
         return Instance(
             synthetic.curves,
             np.asarray(synthetic.point_in_model),

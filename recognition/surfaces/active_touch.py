@@ -5,12 +5,12 @@ information gain (:func:`~recognition.surfaces.touch_planning.plan_touch`), make
 (``touch``: the robot, or a ray cast on a known surface in a benchmark; its contact point,
 with the surface normal when the sensor gives one), refine and re-score every hypothesis
 with all the contact (:meth:`Belief.with_contacts`). When no hypothesis explains the
-contact any more, or when a touch has made the belief sure, the curves and the touches'
-contact points are searched again more broadly
-(:meth:`~recognition.surfaces.database.ModelDatabase.broaden`, at most once per touch,
-after the last touch too):
-poses the first search never proposed, but which fit all the contact as well, compete
-before an answer is called sure. It stops once the belief's confidence
+contact any more, when a touch has made the belief sure, and after the last touch when it
+is not, the curves and the touches' contact points are searched again more broadly
+(:meth:`~recognition.surfaces.database.ModelDatabase.broaden`, at most once per touch):
+poses the first search never proposed, but which fit all the contact as well (or better:
+the hypotheses may all be wrong and still explain the contact), compete before an answer
+is called sure or given. It stops once the belief's confidence
 (:attr:`Belief.confidence`) reaches ``confidence``, the touches are spent, or no allowed
 touch can tell the hypotheses apart. A belief that is sure after the curves makes no
 touch.
@@ -173,8 +173,10 @@ def verify(
             stop = "sure"
             break
         start = time.perf_counter()
-        # (broaden: once per touch; after the last touch too, never without touches)
-        if belief.unexplained >= BROADEN_AT and (k < max_touches or steps):
+        # (broaden: once per touch, never without touches; after the last touch whenever
+        # the belief is not sure: a last look for poses that fit all the contact)
+        last = k == max_touches and bool(steps)
+        if last or (belief.unexplained >= BROADEN_AT and k < max_touches):
             belief = database.broaden(belief)
             broaden_s += time.perf_counter() - start
             if belief.confidence >= confidence:

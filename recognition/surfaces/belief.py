@@ -260,8 +260,7 @@ class Belief:
         )
         if not usable:
             return belief
-        best = min(e for _, _, e in usable)
-        limit = config.error_ratio * best + config.error_margin_m
+        limit = config.error_limit_m(min(e for _, _, e in usable))
         kept = sorted((c for c in usable if c[2] <= limit), key=lambda c: c[2])
         kept = kept[: config.max_hypotheses]
         return belief._rescored([(n, np.asarray(T, float), 0.0) for n, T, _ in kept], models)

@@ -73,3 +73,8 @@ class BeliefConfig:
     prior_rotation_rad: float = 0.2
     prior_translation_m: float = 0.01
     touch_window_m: float = 10.0e-3
+
+    def error_limit_m(self, best_m: float) -> float:
+        """The largest registration error (4.8) of a pose that becomes a hypothesis when
+        the least is ``best_m``, metres."""
+        return self.error_ratio * best_m + self.error_margin_m

@@ -305,8 +305,16 @@ class ModelDatabase:
             placed = touches @ r.poses[:, :3, :3].transpose(0, 2, 1) + r.poses[:, None, :3, 3]
             within = np.abs(self.field_stack(placed, np.full(len(r.poses), w))) <= RIVAL_MISS_M
             kept = np.flatnonzero(np.all(within, axis=1))
-            poses += [(r.model, r.poses[k]) for k in kept]
-        return belief.with_poses(self.models, poses)
+            poses += [(r.model, r.poses[k], float(r.pose_errors_m[k])) for k in kept]
+        if not poses:
+            return replace(belief, broadened=len(belief.windows))
+        # as a recognition's poses become hypotheses (Belief.of): those that fit the
+        # curves within the window of the best fit, the belief's or the search's
+        least = min(e for _, _, e in poses)
+        if belief.best is not None:
+            least = min(least, belief.best.error_m)
+        limit = belief.config.error_limit_m(least)
+        return belief.with_poses(self.models, [(n, T) for n, T, e in poses if e <= limit])
 
     def plan_touch(
         self, belief: Belief, limits: TouchLimits, seed: int = 0, avoid: ArrayLike | None = None

@@ -35,7 +35,14 @@ from recognition.surfaces.belief import Belief
 from recognition.surfaces.distance import FieldStack
 from recognition.surfaces.mesh_model import MeshModel
 
-__all__ = ["TouchLimits", "TouchPlan", "information_gain", "plan_touch", "predicted_depths"]
+__all__ = [
+    "TouchLimits",
+    "TouchPlan",
+    "information_gain",
+    "plan_touch",
+    "predicted_depths",
+    "without_edges",
+]
 
 Array = NDArray[np.float64]
 
@@ -56,6 +63,8 @@ SPREAD_WEIGHT = 1e-3
 #: touch serves the broader search its contact point joins, and still splits the
 #: hypotheses.
 MAX_NONE_WEIGHT = 0.5
+#: A touch expected to gain less information than this (nats) is not made.
+MIN_GAIN_NATS = 1e-3
 #: A pose uncertain by more than this along a motion (metres at the data's reach) is
 #: also represented by poses moved along it ...
 SIGMA_FLOOR_M = 0.1e-3
@@ -224,6 +233,20 @@ def information_gain(
     return np.asarray(-(w @ np.log(mixture)), dtype=np.float64)
 
 
+def without_edges(gain: Array, depths: Array, weights: Array) -> Array:
+    """``gain`` (C,) with the touches that likely hypotheses (``weights`` (H,) at least
+    ``LIKELY_WEIGHT`` of the likeliest's) predict to meet nothing (NaN in ``depths``
+    (H, C)) set to -inf: such a touch is a guess at an edge, a miss pulls no pose, and the
+    slightest error of them all turns a contact into one. Unless no other touch gains
+    ``MIN_GAIN_NATS``: hypotheses far apart disagree only so (where a touch is planned,
+    the most probable meets its own surface)."""
+    likely = weights >= LIKELY_WEIGHT * weights.max()
+    edge = np.isnan(depths[likely]).any(axis=0)
+    if not np.any(~edge & (gain > MIN_GAIN_NATS)):
+        return gain
+    return np.where(edge, -np.inf, gain)
+
+
 def _candidates(
     belief: Belief,
     models: Mapping[str, MeshModel],
@@ -367,12 +390,9 @@ def plan_touch(
     sigma = belief.noise.point_sigma_m(belief.sensor_m)
     none = min(belief.unexplained, MAX_NONE_WEIGHT)
     gain = information_gain(depths, (1 - none) * weights, sigma, none, limits.depth_m)
-    # a touch that likely hypotheses predict to meet nothing is a guess at an edge: a
-    # miss pulls no pose, and the slightest error of them all turns a contact into one
-    likely = weights >= LIKELY_WEIGHT * weights.max()
-    gain[np.isnan(depths[likely]).any(axis=0)] = -np.inf
+    gain = without_edges(gain, depths, weights)
     k = int(np.argmax(gain))
-    if not gain[k] > 1e-3:
+    if not gain[k] > MIN_GAIN_NATS:
         return None
     return TouchPlan(
         P[k],

@@ -21,7 +21,7 @@ from recognition.surfaces.noise_model import huber
 from recognition.surfaces.registration import ALIGNED_SEARCH, FastConfig, data_geometry
 from recognition.surfaces.registration.exact import smooth_normals
 from recognition.surfaces.registration.fast import register_fast
-from recognition.surfaces.touch_planning import information_gain, predicted_depths
+from recognition.surfaces.touch_planning import information_gain, predicted_depths, without_edges
 from recognition.synthetic import mesh_data_curves, ray_contact, sensed_normal
 
 
@@ -254,6 +254,21 @@ def test_a_last_touch_that_nothing_explains_has_a_broader_search_after_it(databa
     assert untouched.belief is result.belief  # no touch, no search
 
 
+def test_a_last_touch_that_leaves_the_belief_unsure_has_a_broader_search_after_it(database):
+    synthetic = _curves(
+        database["blob"], 2500, seed=2, noise=0.002e-3, n_points=21, spacing_m=0.6e-3
+    )
+    result = database.recognize(synthetic.curves, models=["blob"])
+    limits = _limits(synthetic)
+    done = verify(
+        database, result.belief, lambda plan: plan.point, limits, max_touches=1, confidence=1.0
+    )
+    assert done.steps[0].belief.unexplained < 0.5  # the touch met the predicted surface
+    assert done.steps[0].confidence < 1.0  # and left the belief short of sure
+    assert done.steps[0].belief.broadened is None
+    assert done.belief.broadened == 1  # not sure after it: searched again
+
+
 def test_none_of_these_spreads_a_touch_over_the_planned_approach():
     assert BeliefConfig().touch_window_m == TouchLimits(up=np.array([0.0, 0.0, 1.0])).depth_m
 
@@ -289,6 +304,19 @@ def test_information_gain_is_log_two_for_two_far_apart_outcomes_and_zero_for_one
     # a predicted miss is an outcome of its own
     miss = information_gain(np.array([[2e-3], [np.nan]]), np.array([0.5, 0.5]), 1e-5)
     np.testing.assert_allclose(miss, [np.log(2)], atol=1e-9)
+
+
+def test_touches_a_likely_hypothesis_predicts_to_miss_are_made_only_when_nothing_else_tells():
+    # two equally likely hypotheses; touch 0: both meet the surface 1 mm apart, touch 1:
+    # the first meets it, the second predicts nothing there
+    depths = np.array([[4.0e-3, 4.0e-3], [5.0e-3, np.nan]])
+    weights = np.array([0.5, 0.5])
+    gain = information_gain(depths, weights, 0.05e-3)
+    assert gain[1] > 0.6 and gain[0] > 0.6
+    assert np.argmax(without_edges(gain, depths, weights)) == 0  # the contact either way
+    apart = np.array([[4.0e-3, 4.0e-3], [4.0e-3, np.nan]])  # only the edge tells them apart
+    alone = without_edges(information_gain(apart, weights, 0.05e-3), apart, weights)
+    assert np.argmax(alone) == 1 and alone[1] > 0.6
 
 
 def test_none_of_these_is_an_outcome_spread_over_the_approach():
@@ -373,6 +401,17 @@ def test_ray_contact_meets_the_mesh_where_the_ray_does(database):
     hit = ray_contact(model.distance, np.eye(4), [0.0, 0.0, 0.04], [0.0, 0.0, -1.0], 0.02)
     assert np.linalg.norm(hit) == pytest.approx(0.03, abs=0.02e-3)
     assert ray_contact(model.distance, np.eye(4), [0, 0, 0.04], [0, 0, 1.0], 0.02) is None
+
+
+def test_ray_contact_from_a_start_inside_meets_the_mesh_on_the_way_in(database):
+    """The approach's start lies inside the sphere (r = 30 mm): the probe met the surface
+    on its way there, along the approach (by default) or lowered from above."""
+    model = database["sphere"]
+    start, across = [0.02, 0.0, 0.0], [-1.0, 0.0, 0.0]
+    along = ray_contact(model.distance, np.eye(4), start, across, 0.02)
+    assert along == pytest.approx([0.03, 0.0, 0.0], abs=0.02e-3)
+    lowered = ray_contact(model.distance, np.eye(4), start, across, 0.02, way_in=[0, 0, 0.1])
+    assert lowered == pytest.approx([0.02, 0.0, np.sqrt(0.03**2 - 0.02**2)], abs=0.02e-3)
 
 
 def test_a_synthetic_touch_senses_the_meshs_normal_with_the_stated_noise(database):
