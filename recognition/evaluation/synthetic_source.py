@@ -97,7 +97,7 @@ class SyntheticSource:
         normal_rng = _rng("touch normals", spec.key, spec.seed)
         assert synthetic.curves.approach is not None  # sampled curves carry it
         limits = TouchLimits(up=-synthetic.curves.approach, max_tilt_rad=np.deg2rad(80.0))
-        above = 2.0 * float(np.linalg.norm(np.ptp(model.vertices, axis=0)))
+        above = 2.0 * model.extent_m
 
         def touch(plan: TouchPlan) -> Contact | None:
             point = ray_contact(

@@ -5,8 +5,8 @@ information gain (:func:`~recognition.surfaces.touch_planning.plan_touch`), make
 (``touch``: the robot, or a ray cast on a known surface in a benchmark; its contact point,
 with the surface normal when the sensor gives one), refine and re-score every hypothesis
 with all the contact (:meth:`Belief.with_contacts`). When no hypothesis explains the
-contact any more, when a touch has made the belief sure, and after the last touch when it
-is not, the curves and the touches' contact points are searched again more broadly
+contact any more, when a touch has made the belief sure, and after the touches when it is
+not, the curves and the touches' contact points are searched again more broadly
 (:meth:`~recognition.surfaces.database.ModelDatabase.broaden`, at most once per touch):
 poses the first search never proposed, but which fit all the contact as well (or better:
 the hypotheses may all be wrong and still explain the contact), compete before an answer
@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -87,7 +87,8 @@ class TouchStep:
     best_model : str or None
         The best hypothesis's model after the update.
     recognition_time_s : float
-        Planning and updating, seconds (the touch itself excluded).
+        Planning and updating, seconds (the touch itself excluded; the last touch's
+        includes the broader search after it).
     belief : Belief
         The belief after the update.
     no_reading : str or None
@@ -118,8 +119,8 @@ class Verification:
     stop : str
         Why the loop ended: ``"sure"``, ``"touches spent"`` or ``"no informative touch"``.
     broaden_s : float
-        Time of the broader searches (:meth:`ModelDatabase.broaden`), seconds
-        (also in the recognition time of the touch it preceded).
+        Time of the broader searches (:meth:`ModelDatabase.broaden`), seconds (also in
+        the recognition time of the touch it preceded or, after the last, followed).
     """
 
     belief: Belief
@@ -168,22 +169,17 @@ def verify(
     stop = "touches spent"
     broaden_s = 0.0
     avoid = np.zeros((0, 3))  # where touches gave no reading: none is planned near them
-    for k in range(max_touches + 1):
+    for k in range(max_touches):
         if belief.confidence >= confidence:
             stop = "sure"
             break
         start = time.perf_counter()
-        # (broaden: once per touch, never without touches; after the last touch whenever
-        # the belief is not sure: a last look for poses that fit all the contact)
-        last = k == max_touches and bool(steps)
-        if last or (belief.unexplained >= BROADEN_AT and k < max_touches):
+        if belief.unexplained >= BROADEN_AT:
             belief = database.broaden(belief)
             broaden_s += time.perf_counter() - start
             if belief.confidence >= confidence:
                 stop = "sure"
                 break
-        if k == max_touches:
-            break
         plan = database.plan_touch(belief, limits, seed=seed + k, avoid=avoid)
         planned = time.perf_counter() - start
         if plan is None:
@@ -211,7 +207,9 @@ def verify(
                 )
             if belief.confidence >= confidence:
                 # sure after a touch: first look elsewhere for poses that fit all the contact
+                searched = time.perf_counter()
                 belief = database.broaden(belief)
+                broaden_s += time.perf_counter() - searched
         best = belief.best
         steps.append(
             TouchStep(
@@ -225,4 +223,16 @@ def verify(
                 no_reading,
             )
         )
+    if belief.confidence >= confidence:
+        stop = "sure"
+    elif steps and len(belief.windows):
+        # not sure after the touches: a last look for poses that fit all the contact (its
+        # time counted with the last touch's)
+        start = time.perf_counter()
+        belief = database.broaden(belief)
+        searched = time.perf_counter() - start
+        broaden_s += searched
+        steps[-1] = replace(steps[-1], recognition_time_s=steps[-1].recognition_time_s + searched)
+        if belief.confidence >= confidence:
+            stop = "sure"
     return Verification(belief, tuple(steps), initial, stop, broaden_s)

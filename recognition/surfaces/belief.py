@@ -246,7 +246,7 @@ class Belief:
         least error, refined on ``points`` (n, 3) and scored. ``point``: the curves'
         common point p; ``sensor_estimate_m``: the curves' own scatter; ``curves``: the
         curves themselves (kept for a broader search)."""
-        usable = [(n, T, e) for n, T, e in candidates if np.isfinite(e) and n in models]
+        usable = [(n, T, e) for n, T, e in candidates if n in models]
         points = np.asarray(points, dtype=np.float64)
         belief = cls(
             (),
@@ -258,12 +258,10 @@ class Belief:
             config,
             curves=curves,
         )
-        if not usable:
+        kept = config.within_window(usable, config.max_hypotheses)
+        if not kept:
             return belief
-        limit = config.error_limit_m(min(e for _, _, e in usable))
-        kept = sorted((c for c in usable if c[2] <= limit), key=lambda c: c[2])
-        kept = kept[: config.max_hypotheses]
-        return belief._rescored([(n, np.asarray(T, float), 0.0) for n, T, _ in kept], models)
+        return belief._rescored([(n, np.asarray(T, float), 0.0) for n, T in kept], models)
 
     def with_contacts(
         self,

@@ -3,7 +3,11 @@ answer is right (:mod:`recognition.surfaces.belief`)."""
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
 
 __all__ = ["BeliefConfig"]
 
@@ -74,7 +78,18 @@ class BeliefConfig:
     prior_translation_m: float = 0.01
     touch_window_m: float = 10.0e-3
 
-    def error_limit_m(self, best_m: float) -> float:
-        """The largest registration error (4.8) of a pose that becomes a hypothesis when
-        the least is ``best_m``, metres."""
-        return self.error_ratio * best_m + self.error_margin_m
+    def within_window(
+        self,
+        candidates: Sequence[tuple[str, NDArray[np.float64], float]],
+        most: int | None = None,
+    ) -> list[tuple[str, NDArray[np.float64]]]:
+        """Of the poses ``(model, T_model_from_data, error_m)`` of a search (registration
+        error (4.8), metres), those that may become hypotheses: a finite error within
+        ``error_ratio`` times the least plus ``error_margin_m``, least error first, at
+        most ``most`` (None: all)."""
+        usable = [c for c in candidates if np.isfinite(c[2])]
+        if not usable:
+            return []
+        limit = self.error_ratio * min(c[2] for c in usable) + self.error_margin_m
+        kept = sorted((c for c in usable if c[2] <= limit), key=lambda c: c[2])
+        return [(name, T) for name, T, _ in kept[:most]]

@@ -277,10 +277,13 @@ class ModelDatabase:
         """``belief`` with the poses of a broader search of its contact added (the fast
         mode's first fallback pass: candidates over every model's whole surface, more
         poses kept; the touches' contact points choose the poses with the curves): for
-        when no hypothesis explains the contact (:attr:`Belief.unexplained`), or to look
-        for rivals of a sure answer. A pose that misses a touch by more than
-        ``RIVAL_MISS_M`` is left out (it could not compete). Unchanged without
-        curves, or when a broader search has already had all its touches."""
+        when no hypothesis explains the contact (:attr:`Belief.unexplained`), to look
+        for rivals of a sure answer, or for a better answer than an unsure one. A pose
+        that misses a touch by more than ``RIVAL_MISS_M`` is left out (it could not
+        compete); of the others, those a recognition would keep
+        (:meth:`BeliefConfig.within_window`: within the window of the search's least
+        error on the curves) join. Unchanged without curves, or when a broader search has
+        already had all its touches."""
         if belief.curves is None or belief.broadened == len(belief.windows):
             return belief
         touches = belief.points[belief.n_curve_points :]
@@ -306,15 +309,10 @@ class ModelDatabase:
             within = np.abs(self.field_stack(placed, np.full(len(r.poses), w))) <= RIVAL_MISS_M
             kept = np.flatnonzero(np.all(within, axis=1))
             poses += [(r.model, r.poses[k], float(r.pose_errors_m[k])) for k in kept]
-        if not poses:
-            return replace(belief, broadened=len(belief.windows))
         # as a recognition's poses become hypotheses (Belief.of): those that fit the
-        # curves within the window of the best fit, the belief's or the search's
-        least = min(e for _, _, e in poses)
-        if belief.best is not None:
-            least = min(least, belief.best.error_m)
-        limit = belief.config.error_limit_m(least)
-        return belief.with_poses(self.models, [(n, T) for n, T, e in poses if e <= limit])
+        # curves within the window of the search's best fit (all of them: a rival may
+        # fit the curves a little worse and the touches better)
+        return belief.with_poses(self.models, belief.config.within_window(poses))
 
     def plan_touch(
         self, belief: Belief, limits: TouchLimits, seed: int = 0, avoid: ArrayLike | None = None

@@ -51,7 +51,7 @@ MISS_DEPTH_M = 1.0
 #: A touched part must be at least this thick along the approach, metres.
 THICKNESS_M = 4.0e-3
 #: Touches that outcomes this likely (relative to the likeliest) predict to miss are not
-#: made.
+#: made while others tell the hypotheses apart (:func:`without_edges`).
 LIKELY_WEIGHT = 0.05
 #: Hypotheses less probable than this (of the hypotheses' total) are left out of a
 #: touch's outcomes.
