@@ -22,7 +22,7 @@ from scipy.spatial import cKDTree
 
 from recognition.rigid import cross
 
-__all__ = ["DistanceField", "MeshDistance", "folded_faces", "vertex_sums"]
+__all__ = ["DistanceField", "MeshDistance", "folded_faces", "triangle_normals", "vertex_sums"]
 
 Array = NDArray[np.float64]
 Array32 = NDArray[np.float32]
@@ -30,7 +30,7 @@ IntArray = NDArray[np.int64]
 Mask = NDArray[np.bool_]
 
 
-def _unit_normals(triangles: Array) -> Array:
+def triangle_normals(triangles: Array) -> Array:
     """Unit normals (f, 3) of triangles (f, 3, 3), by their corners' order."""
     fn = cross(triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0])
     return fn / np.maximum(np.linalg.norm(fn, axis=1, keepdims=True), 1e-300)
@@ -132,7 +132,7 @@ class MeshDistance:
         """Unit outward face normals (f, 3): by the corners' order, turned over on the
         :attr:`folded` faces (computed on first use and kept)."""
         if self._face_normals is None:
-            normals = _unit_normals(self.vertices[self.faces])
+            normals = triangle_normals(self.vertices[self.faces])
             normals[self.folded] *= -1.0
             self._face_normals = normals
         return self._face_normals
@@ -142,7 +142,7 @@ class MeshDistance:
         :attr:`face_normals`, computed on each call (a search polishes on many models and
         reads few faces of each: only the :attr:`folded` mask is kept)."""
         f = np.asarray(faces, dtype=np.int64).ravel()
-        normals = _unit_normals(self.vertices[self.faces[f]])
+        normals = triangle_normals(self.vertices[self.faces[f]])
         normals[self.folded[f]] *= -1.0
         return normals.reshape(*np.shape(faces), 3)
 

@@ -22,7 +22,12 @@ import trimesh
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import cKDTree
 
-from recognition.surfaces.distance import DistanceField, MeshDistance, vertex_sums
+from recognition.surfaces.distance import (
+    DistanceField,
+    MeshDistance,
+    triangle_normals,
+    vertex_sums,
+)
 from recognition.surfaces.lookup import CurvatureTable
 from recognition.surfaces.mesh_repair import MeshReport, prepare_mesh
 from recognition.surfaces.rings import model_ring_descriptors
@@ -106,22 +111,8 @@ def vertex_normals(vertices: Array, faces: IntArray) -> Array:
     (n, 3) float
         Unit vertex normals.
     """
-    n = vertex_sums(faces, _face_normals(vertices, faces), len(vertices))
+    n = vertex_sums(faces, triangle_normals(vertices[faces]), len(vertices))
     return n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
-
-
-def _face_normals(vertices: Array, faces: IntArray) -> Array:
-    """(f, 3) unit normals of the triangles (right-hand rule on the face's vertex order)."""
-    a, b, c = vertices[faces[:, 0]], vertices[faces[:, 1]], vertices[faces[:, 2]]
-    u, v = b - a, c - a
-    fn = np.column_stack(
-        [
-            u[:, 1] * v[:, 2] - u[:, 2] * v[:, 1],
-            u[:, 2] * v[:, 0] - u[:, 0] * v[:, 2],
-            u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0],
-        ]
-    )
-    return fn / np.maximum(np.linalg.norm(fn, axis=1, keepdims=True), 1e-300)
 
 
 def _adjacency(n_vertices: int, faces: IntArray) -> tuple[sp.csr_matrix, sp.csr_matrix]:
@@ -184,7 +175,7 @@ def adaptive_sample(
     n = len(vertices)
     A, VF = _adjacency(n, faces)
     R2 = ((A + sp.identity(n, dtype=bool, format="csr")) @ (A + sp.identity(n, dtype=bool))).tocsr()
-    fn = _face_normals(vertices, faces)
+    fn = triangle_normals(vertices[faces])
     cos_theta = np.cos(config.sample_angle_rad)
     marked = np.zeros(n, bool)
     stamp = np.full(n, -1, np.int64)
