@@ -103,9 +103,15 @@ class ModelDatabase:
 
     @property
     def field_stack(self) -> FieldStack:
-        """Every model's distance field in one stack, in :attr:`names` order (cached)."""
+        """Every model's distance field in one stack, in :attr:`names` order (cached).
+
+        Each model then reads its field from the stack (a view), so that the fields are
+        held once."""
         if self._stack is None:
-            self._stack = FieldStack.of([m.distance_field for m in self.models.values()])
+            models = list(self.models.values())
+            self._stack = FieldStack.of([m.distance_field for m in models])
+            for i, model in enumerate(models):
+                model.share_distance_field(self._stack.field(i))
         return self._stack
 
     @property

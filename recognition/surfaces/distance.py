@@ -466,7 +466,7 @@ class FieldStack:
         if sum(sizes) >= 2**31:
             raise ValueError("distance fields too large to stack (2^31 voxels at most)")
         return cls(
-            np.concatenate([np.ravel(f.values).astype(np.float32) for f in fields]),
+            np.concatenate([np.ravel(f.values) for f in fields], dtype=np.float32),
             np.concatenate([[0], np.cumsum(sizes)[:-1]]).astype(np.int64),
             np.array([f.values.shape for f in fields], dtype=np.int64),
             np.array([f.origin for f in fields], dtype=float),
@@ -476,6 +476,12 @@ class FieldStack:
 
     def __len__(self) -> int:
         return len(self.offset)
+
+    def field(self, i: int) -> DistanceField:
+        """Field ``i`` as a :class:`DistanceField` whose values are a view into the stack."""
+        size = int(np.prod(self.shape[i]))
+        values = self.values[self.offset[i] : self.offset[i] + size].reshape(self.shape[i])
+        return DistanceField(self.origin[i], float(self.voxel[i]), values, float(self.band[i]))
 
     def nearest_in_frames(
         self, which: ArrayLike, frames: Array, origins: Array, local: Array, paired: bool = False

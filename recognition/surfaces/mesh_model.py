@@ -464,6 +464,19 @@ class MeshModel:
             self.timings["distance_field_s"] = time.perf_counter() - start
         return self._field
 
+    def share_distance_field(self, field: DistanceField) -> None:
+        """Read the distance field from ``field`` (the same grid held elsewhere, for
+        example a view into a database's :class:`~recognition.surfaces.distance.FieldStack`)."""
+        own = self.distance_field
+        same = (field.values.shape, field.voxel, field.band) == (
+            own.values.shape,
+            own.voxel,
+            own.band,
+        )
+        if not same or not np.allclose(field.origin, own.origin):
+            raise ValueError(f"{self.name}: the shared distance field is not this model's grid")
+        self._field = field
+
     @property
     def distance(self) -> MeshDistance:
         """Exact point-to-mesh distances."""

@@ -56,12 +56,11 @@ load_s = time.perf_counter() - start
 parts = {"mesh": 0, "distance field": 0, "candidate map and rings": 0, "lookup table": 0}
 for m in db.models.values():
     parts["mesh"] += m.vertices.nbytes + m.faces.nbytes + m.normals.nbytes
-    parts["distance field"] += m.distance_field.values.nbytes
+    parts["distance field"] += m.distance_field.values.nbytes  # views into the field stack
     c = m.candidate_curvatures
     parts["candidate map and rings"] += c.site.nbytes + c.k1.nbytes + c.k2.nbytes
     parts["candidate map and rings"] += c.d1.nbytes + m.rings.nbytes
     parts["lookup table"] += m.table.site.nbytes + 2 * m.table.k1.nbytes + m.table.d1.nbytes
-parts["field stack"] = db.field_stack.values.nbytes
 index = db.candidate_index
 arrays = (index.owner, index.row, index.k1, index.k2, index.rings)
 parts["candidate index"] = sum(a.nbytes for a in arrays)

@@ -248,6 +248,23 @@ def test_a_low_poly_mesh_is_refined_and_a_huge_one_simplified_with_its_loss():
     assert any("simplified from 81920" in n for n in report.notes)
 
 
+def test_database_holds_each_distance_field_once():
+    from recognition.surfaces.database import ModelDatabase
+
+    models = {
+        "blob": MeshModel("blob", blob(subdivisions=3)),
+        "ball": MeshModel("ball", sphere(0.02, 3)),
+    }
+    own = {name: m.distance_field.values.copy() for name, m in models.items()}
+    stack = ModelDatabase(models).field_stack
+    for name, m in models.items():
+        assert np.shares_memory(m.distance_field.values, stack.values)
+        np.testing.assert_array_equal(m.distance_field.values, own[name])
+    other = MeshModel("other ball", sphere(0.025, 3))
+    with pytest.raises(ValueError, match="not this model's grid"):
+        models["ball"].share_distance_field(other.distance_field)
+
+
 def test_field_stack_reads_each_field_as_the_field_itself():
     from recognition.surfaces.distance import FieldStack
 
