@@ -34,7 +34,7 @@ from recognition.surfaces.rings import RADII_M
 __all__ = ["DATABASE_FORMAT", "MANIFEST", "read_models", "write_models"]
 
 #: Version of the on-disk format; a different version is rebuilt, never read.
-DATABASE_FORMAT = 10
+DATABASE_FORMAT = 11
 #: The manifest's file name.
 MANIFEST = "manifest.json"
 

@@ -35,8 +35,13 @@ __all__ = [
 Array = NDArray[np.float64]
 Array32 = NDArray[np.float32]
 
-#: Ring radii, metres.
-RADII_M = (3.0e-3, 6.0e-3, 10.0e-3)
+#: Ring radii, metres. The data's six arms sample a ring at six angles, so that their
+#: harmonic fit folds the ring's fourth harmonic into the anisotropy and its sixth into
+#: the mean height, more the wider the ring: on catalog and generated models the
+#: six-angle estimate departs from the twelve-sample descriptor by a median of at most
+#: 0.05 (mean height) and 0.18 (anisotropy) score scales at 3 mm, 0.19 and 1.1 at 6 mm,
+#: 1.8 and 3.5 at 10 mm, where a ring misranks more candidates than it ranks.
+RADII_M = (3.0e-3, 6.0e-3)
 #: Samples per ring on a model.
 RING_SAMPLES = 12
 #: Newton steps that find the surface along the normal; a sample farther than
