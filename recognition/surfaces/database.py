@@ -105,8 +105,9 @@ class ModelDatabase:
     def field_stack(self) -> FieldStack:
         """Every model's distance field in one stack, in :attr:`names` order (cached).
 
-        Each model then reads its field from the stack (a view), so that the fields are
-        held once."""
+        Each model then reads its field from the stack (a read-only view), so that the
+        database's fields are held once (a model in two databases reads the stack built
+        last)."""
         if self._stack is None:
             models = list(self.models.values())
             self._stack = FieldStack.of([m.distance_field for m in models])

@@ -232,6 +232,8 @@ def _check_arrays(a: dict[str, np.ndarray], label: str) -> None:
             fail(f"{key} holds NaN or infinite values")
     if a["field_values"].ndim != 3 or a["field_origin"].shape != (3,):
         fail("the distance field must be a 3-D grid with a (3,) origin")
+    if a["field_values"].dtype != np.float32:
+        fail(f"the distance field must hold float32 values, got {a['field_values'].dtype}")
     if not (float(a["field_voxel"]) > 0 and float(a["field_band"]) > 0):
         fail("the distance field's voxel and band must be positive")
     symmetries = a["symmetries"]

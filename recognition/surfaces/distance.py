@@ -465,8 +465,10 @@ class FieldStack:
         sizes = [f.values.size for f in fields]
         if sum(sizes) >= 2**31:
             raise ValueError("distance fields too large to stack (2^31 voxels at most)")
+        values = np.concatenate([np.ravel(f.values) for f in fields], dtype=np.float32)
+        values.flags.writeable = False  # models read their fields from it (views)
         return cls(
-            np.concatenate([np.ravel(f.values) for f in fields], dtype=np.float32),
+            values,
             np.concatenate([[0], np.cumsum(sizes)[:-1]]).astype(np.int64),
             np.array([f.values.shape for f in fields], dtype=np.int64),
             np.array([f.origin for f in fields], dtype=float),

@@ -468,8 +468,9 @@ class MeshModel:
         """Read the distance field from ``field`` (the same grid held elsewhere, for
         example a view into a database's :class:`~recognition.surfaces.distance.FieldStack`)."""
         own = self.distance_field
-        same = (field.values.shape, field.voxel, field.band) == (
+        same = (field.values.shape, field.values.dtype, field.voxel, field.band) == (
             own.values.shape,
+            own.values.dtype,
             own.voxel,
             own.band,
         )

@@ -113,6 +113,10 @@ def test_an_edited_table_is_found_by_its_digest(copy: Path) -> None:
     ("change", "fragment"),
     [
         (lambda a: a["field_values"].__setitem__((0, 0, 0), np.nan), "field_values holds NaN"),
+        (
+            lambda a: a.__setitem__("field_values", a["field_values"].astype(np.float64)),
+            "float32 values",
+        ),
         (lambda a: a.__setitem__("faces", a["faces"] + 10**6), "faces must index"),
         (lambda a: a.__setitem__("normals", a["normals"] * 2), "unit vectors"),
         (lambda a: a.__setitem__("table_k2", a["table_k2"][:-1]), "table_k2 has"),

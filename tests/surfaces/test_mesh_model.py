@@ -259,6 +259,7 @@ def test_database_holds_each_distance_field_once():
     stack = ModelDatabase(models).field_stack
     for name, m in models.items():
         assert np.shares_memory(m.distance_field.values, stack.values)
+        assert not m.distance_field.values.flags.writeable
         np.testing.assert_array_equal(m.distance_field.values, own[name])
     other = MeshModel("other ball", sphere(0.025, 3))
     with pytest.raises(ValueError, match="not this model's grid"):
