@@ -40,7 +40,9 @@ Array32 = NDArray[np.float32]
 #: the mean height, more the wider the ring: on catalog and generated models the
 #: six-angle estimate departs from the twelve-sample descriptor by a median of at most
 #: 0.05 (mean height) and 0.18 (anisotropy) score scales at 3 mm, 0.19 and 1.1 at 6 mm,
-#: 1.8 and 3.5 at 10 mm, where a ring misranks more candidates than it ranks.
+#: 1.8 and 3.5 at 10 mm, where a ring misranks more candidates than it ranks when the
+#: planes are 60 degrees apart (with planes 10-30 degrees apart it still helped a little:
+#: ``docs/benchmarks/sweep_angle.md`` and the README).
 RADII_M = (3.0e-3, 6.0e-3)
 #: Samples per ring on a model.
 RING_SAMPLES = 12
