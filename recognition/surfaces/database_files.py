@@ -29,12 +29,12 @@ from recognition.surfaces.distance import DistanceField
 from recognition.surfaces.lookup import CurvatureTable
 from recognition.surfaces.mesh_model import MeshModel, MeshModelConfig
 from recognition.surfaces.mesh_repair import MeshReport
-from recognition.surfaces.rings import RADII_M
+from recognition.surfaces.rings import DESCRIPTOR_SIZE, RADII_M
 
 __all__ = ["DATABASE_FORMAT", "MANIFEST", "read_models", "write_models"]
 
 #: Version of the on-disk format; a different version is rebuilt, never read.
-DATABASE_FORMAT = 11
+DATABASE_FORMAT = 12
 #: The manifest's file name.
 MANIFEST = "manifest.json"
 
@@ -222,9 +222,11 @@ def _check_arrays(a: dict[str, np.ndarray], label: str) -> None:
                 fail(f"{table}_{part} has {len(a[f'{table}_{part}'])} rows, expected {size}")
     rings = a["rings"]
     if rings.ndim != 3 or rings.shape[0] != len(a["vertex_index"]) or rings.dtype.kind != "f":
-        fail(f"rings must be a float ({len(a['vertex_index'])}, k, 2) array, got {rings.shape}")
-    if rings.shape[1:] != (len(RADII_M), 2):
-        fail(f"rings hold {rings.shape[1:]} invariants per vertex, expected {(len(RADII_M), 2)}")
+        rows = len(a["vertex_index"])
+        fail(f"rings must be a float ({rows}, k, {DESCRIPTOR_SIZE}) array, got {rings.shape}")
+    if rings.shape[1:] != (len(RADII_M), DESCRIPTOR_SIZE):
+        expected = (len(RADII_M), DESCRIPTOR_SIZE)
+        fail(f"rings hold {rings.shape[1:]} values per vertex, expected {expected}")
     if np.isinf(rings).any():
         fail("rings hold infinite values")
     for key in _ARRAYS[1:]:

@@ -191,18 +191,25 @@ def rigid_normal_equations(
 def _ring_cost(
     rings: NDArray[np.float32], data: Array, inv_scale: Array, missing: float, cap: float
 ) -> np.float32:  # pragma: no cover - compiled
-    """Ring score of one row's descriptors (K, 2) (:func:`~recognition.surfaces.rings.
-    ring_scores`); radii the data do not reach have ``inv_scale`` 0."""
+    """Ring score of one row's descriptors (K, 2 + h) against the data's (K, 2 + 2 h)
+    (:func:`~recognition.surfaces.rings.ring_scores`); radii the data do not reach have
+    ``inv_scale`` 0."""
     total = np.float32(0.0)
+    h = rings.shape[1] - 2
     for k in range(rings.shape[0]):
         if inv_scale[k] == 0.0:
             continue
         for c in range(2):
+            widened = np.float32(1.0)
+            for j in range(h):
+                leak = np.float32(rings[k, 2 + j] * data[k, 2 + c * h + j] * inv_scale[k])
+                widened += leak * leak
             z = (rings[k, c] - np.float32(data[k, c])) * np.float32(inv_scale[k])
-            if z != z:
+            z2 = z * z / widened
+            if z2 != z2:
                 total += np.float32(missing)
             else:
-                total += min(z * z, np.float32(cap))
+                total += min(z2, np.float32(cap))
     return total
 
 
@@ -210,7 +217,7 @@ def _ring_cost(
 def ring_scores(
     rings: NDArray[np.float32], data: Array, inv_scale: Array, missing: float, cap: float
 ) -> Array32:  # pragma: no cover - compiled
-    """Ring score (m,) of rows of descriptors (m, K, 2)."""
+    """Ring score (m,) of rows of descriptors (m, K, 2 + h)."""
     out = np.empty(rings.shape[0], np.float32)
     for i in range(rings.shape[0]):
         out[i] = _ring_cost(rings[i], data, inv_scale, missing, cap)

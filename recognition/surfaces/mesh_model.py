@@ -343,7 +343,7 @@ class MeshModel:
         What preparing the mesh did (with ``validate=False``: as recorded then).
     symmetries : (k, 4, 4) float, optional
         The rotational symmetries found earlier (see :attr:`symmetries`).
-    rings : (m, k, 2) float32, optional
+    rings : (m, k, DESCRIPTOR_SIZE) float32, optional
         The candidate map's ring descriptors computed earlier (see :attr:`rings`).
 
     Attributes
@@ -436,8 +436,9 @@ class MeshModel:
 
     @property
     def rings(self) -> Array32:
-        """(m, len(RADII_M), 2) float32 ring descriptors at the candidate map's vertices,
-        in its row order (:mod:`~recognition.surfaces.rings`; computed on first use)."""
+        """(m, len(RADII_M), DESCRIPTOR_SIZE) float32 ring descriptors at the candidate
+        map's vertices, in its row order (:mod:`~recognition.surfaces.rings`; computed on
+        first use)."""
         if self._rings is None:
             start = time.perf_counter()
             dense = self.candidate_curvatures

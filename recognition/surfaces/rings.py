@@ -12,6 +12,13 @@ on a small error of the normal (the tilt terms a1, b1 absorb it). At a few radii
 make a multi-scale generalisation of (k1, k2), precomputed for every candidate vertex of
 every model, so that one ranking over the whole database picks the candidates worth
 screening (:func:`ring_scores`).
+
+Six samples cannot tell the ring's higher harmonics from the fitted ones: at six equally
+spaced angles the fourth harmonic is the second and the sixth a constant. A model's ring,
+sampled at twelve angles, also stores the RMS of each of its harmonics 3 to 6 (in the
+residual of the fit); the data's sample angles give how much of each every invariant
+takes (:func:`alias_gains`, over the harmonic's unknown phase), and the score counts that
+as noise.
 """
 
 from __future__ import annotations
@@ -25,6 +32,7 @@ from recognition.surfaces.local_geometry import LocalSurfaceGeometry
 
 __all__ = [
     "RADII_M",
+    "alias_gains",
     "data_ring_descriptors",
     "model_ring_descriptors",
     "ring_invariants",
@@ -35,17 +43,20 @@ __all__ = [
 Array = NDArray[np.float64]
 Array32 = NDArray[np.float32]
 
-#: Ring radii, metres. The data's six arms sample a ring at six angles, so that their
-#: harmonic fit folds the ring's fourth harmonic into the anisotropy and its sixth into
-#: the mean height, more the wider the ring: on catalog and generated models the
-#: six-angle estimate departs from the twelve-sample descriptor by a median of at most
-#: 0.05 (mean height) and 0.18 (anisotropy) score scales at 3 mm, 0.19 and 1.1 at 6 mm,
-#: 1.8 and 3.5 at 10 mm, where a ring misranks more candidates than it ranks when the
-#: planes are 60 degrees apart (with planes 10-30 degrees apart it still helped a little:
-#: ``docs/benchmarks/sweep_angle.md`` and the README).
+#: Ring radii, metres. Over wider rings the data's six samples alias more of the ring's
+#: higher harmonics (on catalog and generated models the six-angle estimate departs from
+#: the twelve-sample fit by a median of at most 0.05 (mean height) and 0.18 (anisotropy)
+#: base score scales at 3 mm, 0.19 and 1.1 at 6 mm, 1.8 and 3.5 at 10 mm). The score
+#: counts the aliasing (:func:`alias_gains`), and still a 10 mm ring misranks more than
+#: it ranks: over the 280 instances of 100 models at n = 21, d = 1.2 mm it recognises 258
+#: against 265 without it (README, "Scale").
 RADII_M = (3.0e-3, 6.0e-3)
 #: Samples per ring on a model.
 RING_SAMPLES = 12
+#: The harmonics above the fit's that a model's ring resolves (twelve samples).
+ALIAS_HARMONICS = (3, 4, 5, 6)
+#: Values per ring of a model: a0, |(a2, b2)|, the RMS of each of ``ALIAS_HARMONICS``.
+DESCRIPTOR_SIZE = 2 + len(ALIAS_HARMONICS)
 #: Newton steps that find the surface along the normal; a sample farther than
 #: ``ON_SURFACE_M`` from the surface after them is undefined (the ring leaves the field's
 #: band, or the surface folds back).
@@ -82,18 +93,40 @@ def ring_invariants(theta: Array, height: Array) -> Array:
     return np.array([coef[0], np.hypot(coef[3], coef[4])])
 
 
+def alias_gains(theta: Array) -> Array:
+    """(2, len(ALIAS_HARMONICS)) how much of each of a ring's harmonics 3 to 6 the
+    harmonic fit at angles ``theta`` (k,) takes into a0 (row 0) and into |(a2, b2)|
+    (row 1): standard deviations per unit RMS of the harmonic, over its phase. A harmonic
+    k of RMS R and phase psi gives heights sqrt(2) R cos(k theta + psi), and the fit's
+    coefficients are P h with P the fit's pseudo-inverse, so a0 takes R |P_0 . z| with
+    z = exp(i k theta), and the anisotropy, along (a2, b2),
+    R ((|P_3 . z|^2 + |P_4 . z|^2) / 2)^(1/2). At six equally spaced angles a0 takes the
+    sixth harmonic whole and the anisotropy the fourth; NaN with fewer than five
+    angles."""
+    if len(theta) < 5:
+        return np.full((2, len(ALIAS_HARMONICS)), np.nan)
+    pinv = np.linalg.pinv(_harmonics(theta))  # (5, k)
+    z = np.exp(1j * np.outer(ALIAS_HARMONICS, theta))  # (h, k)
+    leak = np.abs(z @ pinv.T)  # (h, 5)
+    return np.stack([leak[:, 0], np.sqrt(0.5 * (leak[:, 3] ** 2 + leak[:, 4] ** 2))])
+
+
 def model_ring_descriptors(
     field: DistanceField, points: Array, normals: Array, directions: Array
 ) -> Array32:
-    """(m, len(RADII_M), 2) float32 ring invariants of a model at ``points`` (m, 3), with
-    unit ``normals`` (m, 3) and tangent ``directions`` (m, 3), read off its distance field.
+    """(m, len(RADII_M), DESCRIPTOR_SIZE) float32 ring descriptors of a model at
+    ``points`` (m, 3), with unit ``normals`` (m, 3) and tangent ``directions`` (m, 3), read
+    off its distance field: the invariants (a0, |(a2, b2)|), then the RMS of each of the
+    ring's harmonics ``ALIAS_HARMONICS`` (which six data samples alias), from the harmonic
+    fit's residual.
 
     Each ring sample is moved along the normal onto the surface (Newton on the field,
     from the height of the ring inside scaled as rho^2). A sample counts where it lies on
     the surface and the surface there is within ``MAX_SLOPE_RAD`` of the tangent plane
     (over a fold or an edge, the height over the plane is not the surface the data
     trace); the invariants are fitted to the samples that count, NaN where fewer than
-    ``MIN_RING_SAMPLES`` do. The data's rings are measured alike
+    ``MIN_RING_SAMPLES`` do; a harmonic's RMS is its Fourier amplitude in the residual
+    over them (where samples are missing, an estimate). The data's rings are measured alike
     (:func:`data_ring_descriptors`).
     """
     stack = FieldStack.of([field])
@@ -101,7 +134,12 @@ def model_ring_descriptors(
     t1 = directions - normals * np.einsum("ij,ij->i", directions, normals)[:, None]
     t1 /= np.linalg.norm(t1, axis=1, keepdims=True)
     t2 = np.cross(normals, t1)
-    out = np.empty((len(points), len(RADII_M), 2), np.float32)
+    out = np.empty((len(points), len(RADII_M), DESCRIPTOR_SIZE), np.float32)
+    waves = np.exp(-1j * np.outer(theta, ALIAS_HARMONICS))  # (RING_SAMPLES, h)
+    # a harmonic's |sum of residual * exp(-i k theta)| / count is half its amplitude, so
+    # sqrt(2) times it is its RMS; the Nyquist harmonic's is its RMS at the samples
+    # (twelve samples see cos 6 theta alone)
+    per_amplitude = np.where(2 * np.array(ALIAS_HARMONICS) == RING_SAMPLES, 1.0, np.sqrt(2.0))
     design = _harmonics(theta)  # (RING_SAMPLES, 5)
     for start in range(0, len(points), 4096):
         s = slice(start, start + 4096)
@@ -128,8 +166,18 @@ def model_ring_descriptors(
             lhs = np.einsum("bpi,pj->bij", weighted, design) + 1e-9 * np.eye(5)
             rhs = np.einsum("bpi,bp->bi", weighted, np.where(on, h, 0.0))
             coef = np.linalg.solve(lhs, rhs[..., None])[..., 0]
-            inv = np.stack([coef[:, 0], np.hypot(coef[:, 3], coef[:, 4])], axis=-1)
-            inv[on.sum(axis=1) < MIN_RING_SAMPLES] = np.nan
+            count = on.sum(axis=1)
+            residual = np.where(on, h - coef @ design.T, 0.0)
+            amplitude = np.abs(residual @ waves) / np.maximum(count, 1)[:, None]
+            inv = np.concatenate(
+                [
+                    coef[:, :1],
+                    np.hypot(coef[:, 3], coef[:, 4])[:, None],
+                    amplitude * per_amplitude,
+                ],
+                axis=1,
+            )
+            inv[count < MIN_RING_SAMPLES] = np.nan
             out[s, k] = inv
             h = np.where(on, h, np.nan)
             inside = rho
@@ -137,8 +185,10 @@ def model_ring_descriptors(
 
 
 def data_ring_descriptors(curves: DataCurves, geometry: LocalSurfaceGeometry) -> Array:
-    """(len(RADII_M), 2) ring invariants of the data about p in the frame of ``geometry``
-    (d1, d2, N): on each arm of each curve, the point whose distance from p in the
+    """(len(RADII_M), 2 + 2 len(ALIAS_HARMONICS)) ring descriptors of the data about p in
+    the frame of ``geometry`` (d1, d2, N): the invariants (a0, |(a2, b2)|), then their
+    :func:`alias_gains` (a0's, then the anisotropy's). A ring's
+    samples are, on each arm of each curve, the point whose distance from p in the
     tangent plane first reaches the radius, interpolated, where the arm rises or falls
     there by less than ``MAX_SLOPE_RAD``; NaN at a radius fewer than five arms give."""
     p, frame = geometry.point, geometry.frame
@@ -158,16 +208,16 @@ def data_ring_descriptors(curves: DataCurves, geometry: LocalSurfaceGeometry) ->
                     continue
                 at = q[i] + (rho - r[i]) / (r[i + 1] - r[i]) * (q[i + 1] - q[i])
                 samples[k].append((float(np.arctan2(at[1], at[0])), float(at[2])))
-    out = np.full((len(RADII_M), 2), np.nan)
+    out = np.full((len(RADII_M), 2 + 2 * len(ALIAS_HARMONICS)), np.nan)
     for k, found in enumerate(samples):
         if found:
             theta, height = np.array(found).T
-            out[k] = ring_invariants(theta, height)
+            out[k] = np.concatenate([ring_invariants(theta, height), *alias_gains(theta)])
     return out
 
 
 def ring_weights(data: Array) -> Array:
-    """(K,) the reciprocal scale of each radius' components in :func:`ring_scores`:
+    """(K,) the reciprocal base scale of each radius' components in :func:`ring_scores`:
     1 / (``SCALE_FLOOR_M + SCALE_RELATIVE * |a0|``), 0 at radii the data do not reach."""
     reached = np.isfinite(data).all(axis=1)
     scale = SCALE_FLOOR_M + SCALE_RELATIVE * np.abs(np.nan_to_num(data[:, 0]))
@@ -175,11 +225,13 @@ def ring_weights(data: Array) -> Array:
 
 
 def ring_scores(models: Array32, data: Array) -> Array:
-    """(m,) squared standardised distance of models' ring descriptors (m, K, 2) from the
-    data's (K, 2), over the radii the data reach: each component scaled by
-    ``SCALE_FLOOR_M + SCALE_RELATIVE * |a0|`` (the data's mean height at that radius),
-    ``MISSING_COST`` per component where the model's ring is undefined, at most
-    ``MAX_COST`` per component."""
+    """(m,) squared standardised distance of models' ring descriptors (m, K,
+    DESCRIPTOR_SIZE) from the data's (:func:`data_ring_descriptors`), over the radii the
+    data reach: each invariant's difference over the root sum of squares of the base
+    scale ``SCALE_FLOOR_M + SCALE_RELATIVE * |a0|`` (the data's mean height at that
+    radius) and of the model's harmonics' RMS times the data's gains for them (what the
+    data's fit aliases); ``MISSING_COST`` per component where the model's ring is
+    undefined, at most ``MAX_COST`` per component."""
     from recognition.surfaces import field_kernels  # numba: imported when first needed
 
     return field_kernels.ring_scores(

@@ -216,14 +216,18 @@ def test_exact_refinement_never_makes_a_pose_worse(models):
 
 def test_recognising_against_some_models_registers_them_as_in_the_full_search(database, models):
     # the candidate and pose budgets are shared by the models searched: a model that
-    # cannot win may be searched differently, the winner is found alike
+    # cannot win may be searched differently, the winner is found alike (the same pose,
+    # or one of its images under the ellipsoid's turns by half a revolution, which its
+    # tessellation makes a few micrometres different)
     synthetic = _curves(models["ellipsoid"], 1500, seed=4, noise=0.01e-3)
     full = database.recognize(synthetic.curves)
     part = database.recognize(synthetic.curves, models=["torus", "ellipsoid"])
     assert set(part.registrations) == {"torus", "ellipsoid"}
     assert part.name == full.name == "ellipsoid"
     a, b = full.registrations["ellipsoid"], part.registrations["ellipsoid"]
-    np.testing.assert_allclose(a.location, b.location, atol=1e-6)
+    turns = models["ellipsoid"].symmetries
+    images = [a.location, *(turns[:, :3, :3] @ a.location + turns[:, :3, 3])]
+    assert min(np.linalg.norm(image - b.location) for image in images) < 0.02e-3
 
 
 def test_the_fallback_search_recovers_a_pose_that_a_sparse_first_pass_misses(models):

@@ -12,9 +12,12 @@ from recognition.surfaces.database import ModelDatabase
 from recognition.surfaces.mesh_model import MeshModel
 from recognition.surfaces.registration import FastConfig, data_geometry
 from recognition.surfaces.rings import (
+    ALIAS_HARMONICS,
     MAX_COST,
     RADII_M,
+    alias_gains,
     data_ring_descriptors,
+    model_ring_descriptors,
     ring_invariants,
     ring_scores,
 )
@@ -42,6 +45,28 @@ def test_a_sphere_s_rings_are_its_exact_heights(ball):
     expected = [_sphere_height(0.03, rho) for rho in RADII_M]
     np.testing.assert_allclose(ball.rings[:, :, 0].mean(axis=0), expected, atol=0.02e-3)
     assert np.abs(ball.rings[:, :, 1]).max() < 0.03e-3  # isotropic
+    assert np.abs(ball.rings[:, :, 2:]).max() < 0.03e-3  # no higher harmonics
+
+
+def test_six_samples_alias_the_fourth_and_sixth_harmonics_by_their_gains():
+    """At six equally spaced angles a ring's sixth harmonic is read as mean height and its
+    fourth as anisotropy, each whole (gain 1), the others not at all; with the planes 10
+    degrees apart the fit takes several times more; fewer than five angles give none."""
+    theta = np.linspace(0, 2 * np.pi, 6, endpoint=False) + 0.3
+    gains = alias_gains(theta)  # rows: a0, anisotropy; columns: harmonics 3, 4, 5, 6
+    np.testing.assert_allclose(gains, [[0, 0, 0, 1], [0, 1, 0, 0]], atol=1e-12)
+    rms = 0.05
+    for psi in np.linspace(0.0, np.pi, 7):
+        fourth = np.sqrt(2) * rms * np.cos(4 * theta + psi)
+        a0, anisotropy = ring_invariants(theta, 0.4 + 0.1 * np.cos(2 * theta) + fourth)
+        assert a0 == pytest.approx(0.4, abs=1e-12)
+        assert abs(anisotropy - 0.1) <= np.sqrt(2) * rms + 1e-12
+        sixth = np.sqrt(2) * rms * np.cos(6 * theta + psi)
+        a0, _ = ring_invariants(theta, 0.4 + sixth)
+        assert abs(a0 - 0.4) <= np.sqrt(2) * rms + 1e-12
+    close = np.deg2rad([0.0, 180.0, 10.0, 190.0, 20.0, 200.0])
+    assert (alias_gains(close)[:, 1:].max(axis=1) > 5.0).all()
+    assert np.isnan(alias_gains(theta[:4])).all()
 
 
 def _rings_of_exact_curves(model, vertex, n_points):
@@ -68,13 +93,22 @@ def test_data_rings_match_the_model_s_at_the_true_place(ball):
 
 
 def test_scores_rank_the_matching_surface_first_and_bound_a_spoiled_ring():
-    data = np.array([[-0.15e-3, 0.0], [-0.6e-3, 0.0], [np.nan, np.nan]])
+    # the data's rings at six equally spaced angles: the sixth harmonic goes into a0,
+    # the fourth into the anisotropy
+    gains = [0.0, 0.0, 0.0, 1.0, 0.0, 1.0, 0.0, 0.0]
+    data = np.array([[-0.15e-3, 0.0, *gains], [-0.6e-3, 0.0, *gains], [np.nan] * 10])
+    smooth = [0.0] * 4
     models = np.array(
         [
-            [[-0.15e-3, 0.0], [-0.6e-3, 0.0], [-1.7e-3, 0.0]],  # the same surface
-            [[-0.30e-3, 0.0], [-1.2e-3, 0.0], [-3.4e-3, 0.0]],  # twice as curved
-            [[-0.15e-3, 0.0], [np.nan, np.nan], [-1.7e-3, 0.0]],  # a ring leaves it
-            [[-0.15e-3, 0.0], [0.6e-3, 0.0], [-1.7e-3, 0.0]],  # one ring far off
+            [[-0.15e-3, 0.0, *smooth], [-0.6e-3, 0.0, *smooth], [-1.7e-3, 0.0, *smooth]],
+            [[-0.30e-3, 0.0, *smooth], [-1.2e-3, 0.0, *smooth], [-3.4e-3, 0.0, *smooth]],
+            [[-0.15e-3, 0.0, *smooth], [np.nan] * 6, [-1.7e-3, 0.0, *smooth]],
+            [[-0.15e-3, 0.0, *smooth], [0.6e-3, 0.0, *smooth], [-1.7e-3, 0.0, *smooth]],
+            # twice as curved, but its 6 mm ring's sixth harmonic (RMS 0.6 mm) could
+            # make up the difference in a0: it counts one standard unit there
+            [[-0.30e-3, 0.0, *smooth], [-1.2e-3, 0.0, 0, 0, 0, 0.6e-3], [-3.4e-3, 0.0, *smooth]],
+            # a fifth harmonic goes into neither invariant at these angles
+            [[-0.30e-3, 0.0, *smooth], [-1.2e-3, 0.0, 0, 0, 0.6e-3, 0], [-3.4e-3, 0.0, *smooth]],
         ],
         np.float32,
     )
@@ -82,6 +116,8 @@ def test_scores_rank_the_matching_surface_first_and_bound_a_spoiled_ring():
     assert scores[0] == pytest.approx(0.0, abs=1e-6)
     assert scores[0] < scores[2] < scores[1]
     assert scores[3] == pytest.approx(MAX_COST, rel=1e-6)
+    assert scores[4] == pytest.approx(scores[1] - MAX_COST + 1.0, rel=0.05)
+    assert scores[5] == pytest.approx(scores[1], rel=1e-6)
 
 
 def _blob_curves(model: MeshModel, noise_std_m: float, seed: int) -> SyntheticCurves:
@@ -162,3 +198,30 @@ def test_lookup_scans_the_k1_window_and_keeps_what_a_full_scan_keeps():
     for field in fields:
         assert np.isin(kept[field], chosen[field]).all()
         assert np.all(np.diff(kept[field]) > 0)
+
+
+def test_a_model_ring_stores_the_rms_of_its_fourth_harmonic():
+    """A sphere whose radius varies near its pole as c rho^4 cos(4 phi) (0.05 mm at 6 mm
+    from the pole): at the pole, the 6 mm ring's fourth harmonic has RMS 0.05 / sqrt 2 mm
+    and its other harmonics little; the invariants are the sphere's."""
+    import trimesh
+
+    radius, rho6, bump = 0.03, 6.0e-3, 0.05e-3
+    mesh = trimesh.creation.icosphere(subdivisions=6, radius=radius)
+    x, y, z = mesh.vertices.T
+    rho = np.hypot(x, y)
+    wave = bump * (rho / rho6) ** 4 * np.cos(4 * np.arctan2(y, x)) * (z > 0)
+    mesh = trimesh.Trimesh(mesh.vertices * (1 + wave / radius)[:, None], mesh.faces)
+    model = MeshModel("bumped", mesh)
+    rings = model_ring_descriptors(
+        model.distance_field,
+        np.array([[0.0, 0.0, radius]]),
+        np.array([[0.0, 0, 1]]),
+        np.array([[1.0, 0, 0]]),
+    )[0]
+    six = RADII_M.index(rho6)
+    assert rings[six, 0] == pytest.approx(_sphere_height(radius, rho6), abs=5e-6)
+    assert abs(rings[six, 1]) < 5e-6
+    harmonics = dict(zip(ALIAS_HARMONICS, rings[six, 2:], strict=True))
+    assert harmonics[4] == pytest.approx(bump / np.sqrt(2), rel=0.1)
+    assert max(harmonics[3], harmonics[5], harmonics[6]) < 5e-6

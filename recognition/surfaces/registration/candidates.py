@@ -40,7 +40,7 @@ class CandidateIndex:
         The row in its model's candidate map.
     k1, k2 : (R,) float, 1/m
         ``k1`` ascending.
-    rings : (R, K, 2) float32
+    rings : (R, K, DESCRIPTOR_SIZE) float32
         Ring descriptors (:mod:`~recognition.surfaces.rings`).
     """
 
