@@ -121,6 +121,8 @@ def test_an_edited_table_is_found_by_its_digest(copy: Path) -> None:
         (lambda a: a.__setitem__("normals", a["normals"] * 2), "unit vectors"),
         (lambda a: a.__setitem__("table_k2", a["table_k2"][:-1]), "table_k2 has"),
         (lambda a: a.__setitem__("field_voxel", np.array(-1.0)), "voxel and band"),
+        # rings of an older format: (a0, anisotropy) alone
+        (lambda a: a.__setitem__("rings", a["rings"][:, :, :2]), "rings hold"),
         (lambda a: a.pop("normals"), "cannot be read"),
     ],
 )

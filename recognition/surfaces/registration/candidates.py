@@ -11,7 +11,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from recognition.surfaces.local_geometry import LocalSurfaceGeometry
 from recognition.surfaces.mesh_model import MeshModel
-from recognition.surfaces.rings import MAX_COST, MISSING_COST, ring_weights
+from recognition.surfaces.rings import MAX_COST, MISSING_COST, check_ring_shapes, ring_weights
 
 __all__ = ["CandidateIndex", "smallest"]
 
@@ -86,6 +86,7 @@ class CandidateIndex:
         """
         from recognition.surfaces import field_kernels  # numba: imported when first needed
 
+        check_ring_shapes(self.rings, data_rings)
         allowed = np.zeros(int(self.owner.max()) + 1, bool)
         allowed[fields] = True
         lo, hi = 0, self.k1.size
