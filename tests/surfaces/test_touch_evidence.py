@@ -55,3 +55,33 @@ def test_sensed_normals_are_made_unit_and_bad_ones_refused():
             sensed_normals(bad, 1)
     with pytest.raises(InvalidArgument, match="normal_sd_rad"):
         NoiseModel(normal_sd_rad=0.0)
+
+
+def test_a_missed_touch_reads_only_the_ray_points_that_can_be_inside():
+    """The deepest point of a missed touch's ray inside the posed model is the least
+    signed distance over all its points whenever that is negative, and not negative when
+    no point is inside, though most points are never read (rays through, grazing and
+    clear of a blob, at random poses)."""
+    from testing_meshes import blob
+
+    from recognition.surfaces.mesh_model import MeshModel
+    from recognition.surfaces.touch_evidence import _deepest
+
+    distance = MeshModel("blob", blob()).distance
+    rng = np.random.default_rng(4)
+    inside = outside = 0
+    for _ in range(60):
+        start = rng.normal(size=3) * 0.05
+        aim = rng.normal(size=3) * 0.02
+        direction = (aim - start) / np.linalg.norm(aim - start)
+        steps = np.arange(0.0, 0.08 + 0.05e-3, 0.1e-3)
+        ray = start + steps[:, None] * direction
+        every = float(distance.signed(ray).min())
+        deepest = _deepest(distance, ray, steps)
+        if every < 0:
+            inside += 1
+            assert deepest == every
+        else:
+            outside += 1
+            assert deepest >= 0
+    assert inside >= 10 and outside >= 10
