@@ -190,10 +190,10 @@ def model_ring_descriptors(
 def data_ring_descriptors(curves: DataCurves, geometry: LocalSurfaceGeometry) -> Array:
     """(len(RADII_M), 2 + 2 len(ALIAS_HARMONICS)) ring descriptors of the data about p in
     the frame of ``geometry`` (d1, d2, N): the invariants (a0, |(a2, b2)|), then their
-    :func:`alias_gains` (a0's, then the anisotropy's). A ring's
-    samples are, on each arm of each curve, the point whose distance from p in the
-    tangent plane first reaches the radius, interpolated, where the arm rises or falls
-    there by less than ``MAX_SLOPE_RAD``; NaN at a radius fewer than five arms give."""
+    :func:`alias_gains` (a0's, then the anisotropy's). A ring's samples are, on each arm
+    of each curve, the point whose distance from p in the tangent plane first reaches the
+    radius, interpolated, where the arm rises or falls there by less than
+    ``MAX_SLOPE_RAD``; NaN at a radius fewer than five arms give."""
     p, frame = geometry.point, geometry.frame
     steep = np.tan(MAX_SLOPE_RAD)
     samples: list[list[tuple[float, float]]] = [[] for _ in RADII_M]
