@@ -81,9 +81,11 @@ def reliability(
 
 def touch_summary(records: Sequence[Record]) -> dict[str, Any] | None:
     """What the touches did, JSON-ready (None when no record made touches): answers right
-    after the curves and after the touches, touches made (median, mean, max), the
-    sessions sure after the curves that made none, and the planning and update time per
-    touch (median, p90, max)."""
+    after the curves and after the touches, the median distance of the answer's p from the
+    truth after the touches (an answer naming another model counts as infinitely far;
+    None when that makes the median infinite),
+    touches made (median, mean, max), the sessions sure after the curves that made none,
+    and the planning and update time per touch (median, mean, p90, max)."""
     touched = [r for r in records if r.touches is not None and r.confidence is not None]
     if not touched:
         return None
@@ -92,12 +94,16 @@ def touch_summary(records: Sequence[Record]) -> dict[str, Any] | None:
         [t for r in touched if r.touches is not None for t in r.touches["recognition_times_s"]]
     )
     sure_first = [r for r in touched if r.confidence is not None and r.confidence >= SURE]
+    located = np.array([_located_mm(r) for r in touched])
     return {
         "instances": len(touched),
         "right_after_curves": float(np.mean([r.answered_right() for r in touched])),
         "right_after_touches": float(np.mean([r.answered_right(True) for r in touched])),
         "recognized_after_touches": float(
             np.mean([bool(r.touches and r.touches["success"]) for r in touched])
+        ),
+        "localisation_after_touches_median_mm": (
+            float(np.median(located)) if np.isfinite(np.median(located)) else None
         ),
         "touches_median": float(np.median(made)),
         "touches_mean": float(np.mean(made)),
@@ -107,9 +113,18 @@ def touch_summary(records: Sequence[Record]) -> dict[str, Any] | None:
             sum(1 for r in sure_first if r.touches is not None and r.touches["made"] > 0)
         ),
         "touch_time_median_s": float(np.median(times)) if times.size else None,
+        "touch_time_mean_s": float(np.mean(times)) if times.size else None,
         "touch_time_p90_s": float(np.percentile(times, 90)) if times.size else None,
         "touch_time_max_s": float(times.max()) if times.size else None,
     }
+
+
+def _located_mm(record: Record) -> float:
+    """How far the answer after the touches puts p from the truth, mm (inf: another model
+    or none)."""
+    touches = record.touches or {}
+    error = touches.get("answer_error_mm")
+    return float(error) if touches.get("success") and error is not None else float("inf")
 
 
 def _percent(value: float | None) -> str:
@@ -154,10 +169,18 @@ def touches_section(records: Sequence[Record], figure_name: str | None = None) -
             + (
                 "-"
                 if touched["touch_time_median_s"] is None
-                else f"{touched['touch_time_median_s']:.3f} s, p90 "
+                else f"{touched['touch_time_median_s']:.3f} s, mean "
+                f"{touched['touch_time_mean_s']:.3f} s, p90 "
                 f"{touched['touch_time_p90_s']:.3f} s, max {touched['touch_time_max_s']:.3f} s"
             )
-            + f". Recognised after the touches: {_percent(touched['recognized_after_touches'])}.",
+            + f". Recognised after the touches: {_percent(touched['recognized_after_touches'])}"
+            + "; localisation after the touches: median "
+            + (
+                "beyond reach (most answers name another model)"
+                if touched["localisation_after_touches_median_mm"] is None
+                else f"{touched['localisation_after_touches_median_mm']:.3g} mm"
+            )
+            + ".",
         ]
     if figure_name:
         lines += ["", f"![reliability]({figure_name})"]
