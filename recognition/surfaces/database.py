@@ -31,10 +31,12 @@ from recognition.surfaces.registration import (
     ThesisConfig,
     data_geometry,
     data_noise_m,
+    outlier_threshold_m,
     rank,
     register_all,
     registration_mode,
 )
+from recognition.surfaces.registration.contact_pairs import pair_search
 
 __all__ = ["DATABASE_FORMAT", "MeshRegistrationConfig", "ModelDatabase", "Recognition"]
 
@@ -42,6 +44,12 @@ __all__ = ["DATABASE_FORMAT", "MeshRegistrationConfig", "ModelDatabase", "Recogn
 #: pose uncertain by 0.3 mm along the touch's normal loses more than 5 nats on it
 #: (:mod:`~recognition.surfaces.touch_evidence`) against one that meets it.
 RIVAL_MISS_M = 1.0e-3
+#: A broader search also pairs p with the last this many touches that sensed a normal
+#: (:func:`~recognition.surfaces.registration.contact_pairs.pair_search`) ...
+PAIRED_TOUCHES = 1
+#: ... on the models of the belief's hypotheses and the this many that the broader
+#: search fits best.
+PAIRED_MODELS = 4
 
 if TYPE_CHECKING:
     from recognition.surfaces.touch_planning import TouchLimits, TouchPlan
@@ -281,16 +289,19 @@ class ModelDatabase:
         return belief.with_contacts(self.models, points, misses, windows, normals)
 
     def broaden(self, belief: Belief) -> Belief:
-        """``belief`` with the poses of a broader search of its contact added (the fast
-        mode's first fallback pass: candidates over every model's whole surface, more
-        poses kept; the touches' contact points choose the poses with the curves): for
-        when no hypothesis explains the contact (:attr:`Belief.unexplained`), to look
-        for rivals of a sure answer, or for a better answer than an unsure one. A pose
-        that misses a touch by more than ``RIVAL_MISS_M`` is left out (it could not
-        compete); of the others, those a recognition would keep
-        (:meth:`BeliefConfig.within_window`: within the window of the search's least
-        error on the curves) join. Unchanged without curves, or when a broader search has
-        already had all its touches."""
+        """``belief`` with the poses of a broader search of its contact added: for when
+        no hypothesis explains the contact (:attr:`Belief.unexplained`), to look for
+        rivals of a sure answer, or for a better answer than an unsure one. Two searches:
+        the fast mode's first fallback pass (candidates over every model's whole surface,
+        more poses kept; the touches' contact points choose the poses with the curves),
+        and, on the models of the hypotheses and those that pass fits best, poses from p
+        paired with the last ``PAIRED_TOUCHES`` touches that sensed a normal
+        (:func:`~recognition.surfaces.registration.contact_pairs.pair_search`: where the
+        curves leave the pose free, a touch elsewhere fixes it). A pose that misses a
+        touch by more than ``RIVAL_MISS_M`` is left out (it could not compete); of the
+        others, those a recognition would keep (:meth:`BeliefConfig.within_window`:
+        within the window of the least error on the curves) join. Unchanged without
+        curves, or when a broader search has already had all its touches."""
         if belief.curves is None or belief.broadened == len(belief.windows):
             return belief
         touches = belief.points[belief.n_curve_points :]
@@ -308,18 +319,42 @@ class ModelDatabase:
             index=self.candidate_index,
             contact=touches,
         )
-        poses = []
-        for w, r in enumerate(found):
-            if r.rejected or not len(r.poses):
-                continue
-            placed = touches @ r.poses[:, :3, :3].transpose(0, 2, 1) + r.poses[:, None, :3, 3]
-            within = np.abs(self.field_stack(placed, np.full(len(r.poses), w))) <= RIVAL_MISS_M
-            kept = np.flatnonzero(np.all(within, axis=1))
-            poses += [(r.model, r.poses[k], float(r.pose_errors_m[k])) for k in kept]
-        # as a recognition's poses become hypotheses (Belief.of): those that fit the
-        # curves within the window of the search's best fit (all of them: a rival may
-        # fit the curves a little worse and the touches better)
-        return belief.with_poses(self.models, belief.config.within_window(poses))
+        poses = [
+            (r.model, T, float(e))
+            for r in found
+            if not r.rejected
+            for T, e in zip(r.poses, r.pose_errors_m, strict=True)
+        ]
+        sensed = np.flatnonzero(np.all(np.isfinite(belief.normals), axis=1))[-PAIRED_TOUCHES:]
+        if len(sensed):
+            fitted = sorted((r for r in found if not r.rejected), key=lambda r: r.error_m)
+            names = dict.fromkeys(
+                [h.model for h in belief.hypotheses] + [r.model for r in fitted[:PAIRED_MODELS]]
+            )
+            field_of = {n: i for i, n in enumerate(self.names)}
+            poses += pair_search(
+                [self.models[n] for n in names],
+                self.field_stack,
+                np.array([field_of[n] for n in names], dtype=np.int64),
+                belief.curves.points,
+                geometry.point,
+                geometry.normal,
+                touches[sensed],
+                belief.normals[sensed],
+                outlier_threshold_m(data_noise_m(belief.curves), wide),
+                seed=len(belief.windows),
+            )
+        # a pose that misses a touch could not compete; of the others, as a recognition's
+        # poses become hypotheses (Belief.of): those that fit the curves within the window
+        # of the least error (all of them: a rival may fit the curves a little worse and
+        # the touches better)
+        field_of = {n: i for i, n in enumerate(self.names)}
+        kept = []
+        for name, T, error in poses:
+            placed = touches @ T[:3, :3].T + T[:3, 3]
+            if np.all(np.abs(self.field_stack(placed[None], [field_of[name]])) <= RIVAL_MISS_M):
+                kept.append((name, T, error))
+        return belief.with_poses(self.models, belief.config.within_window(kept))
 
     def plan_touch(
         self, belief: Belief, limits: TouchLimits, seed: int = 0, avoid: ArrayLike | None = None

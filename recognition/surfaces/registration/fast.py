@@ -61,7 +61,7 @@ from recognition.surfaces.registration.result import (
 )
 from recognition.surfaces.registration.screening import Poses, arm_indices, screen
 
-__all__ = ["register_fast"]
+__all__ = ["fit_on_fields", "register_fast"]
 
 Array = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -72,7 +72,7 @@ IntArray = NDArray[np.int64]
 CLIP_SIGMAS = 4.0
 
 
-def _gauss_newton(
+def fit_on_fields(
     stack: FieldStack,
     which: IntArray,
     points: Array,
@@ -184,7 +184,7 @@ def _search(
             return poses
         start = time.perf_counter()
         owner = np.concatenate([np.full(len(p.R), w) for w, p in live])
-        R, t, rms, trace = _gauss_newton(
+        R, t, rms, trace = fit_on_fields(
             stack,
             which_field[owner],
             np.concatenate([stage_points, contact]),
