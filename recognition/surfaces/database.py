@@ -47,9 +47,9 @@ RIVAL_MISS_M = 1.0e-3
 #: A broader search also pairs p with the last this many touches that sensed a normal
 #: (:func:`~recognition.surfaces.registration.contact_pairs.pair_search`) ...
 PAIRED_TOUCHES = 1
-#: ... on the models of the belief's hypotheses and the this many that the broader
-#: search fits best.
-PAIRED_MODELS = 4
+#: ... on this many models: the hypotheses' (most probable first), then those the
+#: broader search fits best.
+PAIRED_MODELS = 3
 
 if TYPE_CHECKING:
     from recognition.surfaces.touch_planning import TouchLimits, TouchPlan
@@ -294,14 +294,15 @@ class ModelDatabase:
         rivals of a sure answer, or for a better answer than an unsure one. Two searches:
         the fast mode's first fallback pass (candidates over every model's whole surface,
         more poses kept; the touches' contact points choose the poses with the curves),
-        and, on the models of the hypotheses and those that pass fits best, poses from p
-        paired with the last ``PAIRED_TOUCHES`` touches that sensed a normal
-        (:func:`~recognition.surfaces.registration.contact_pairs.pair_search`: where the
-        curves leave the pose free, a touch elsewhere fixes it). A pose that misses a
-        touch by more than ``RIVAL_MISS_M`` is left out (it could not compete); of the
-        others, those a recognition would keep (:meth:`BeliefConfig.within_window`:
-        within the window of the least error on the curves) join. Unchanged without
-        curves, or when a broader search has already had all its touches."""
+        and, on ``PAIRED_MODELS`` models (the hypotheses', then those that pass fits
+        best), poses from p paired with the last ``PAIRED_TOUCHES`` touches that sensed a
+        normal (:func:`~recognition.surfaces.registration.contact_pairs.pair_search`,
+        scored on the belief's curve points: where the curves leave the pose free, a
+        touch elsewhere fixes it). A pose that misses a touch by more than
+        ``RIVAL_MISS_M`` is left out (it could not compete); of the others, those a
+        recognition would keep (:meth:`BeliefConfig.within_window`: within the window of
+        the least error on the curves) join. Unchanged without curves, or when a broader
+        search has already had all its touches."""
         if belief.curves is None or belief.broadened == len(belief.windows):
             return belief
         touches = belief.points[belief.n_curve_points :]
@@ -327,16 +328,19 @@ class ModelDatabase:
         ]
         sensed = np.flatnonzero(np.all(np.isfinite(belief.normals), axis=1))[-PAIRED_TOUCHES:]
         if len(sensed):
+            weight: dict[str, float] = {}
+            for h in belief.hypotheses:
+                weight[h.model] = weight.get(h.model, 0.0) + h.posterior
             fitted = sorted((r for r in found if not r.rejected), key=lambda r: r.error_m)
-            names = dict.fromkeys(
-                [h.model for h in belief.hypotheses] + [r.model for r in fitted[:PAIRED_MODELS]]
-            )
+            names = list(
+                dict.fromkeys(sorted(weight, key=lambda n: -weight[n]) + [r.model for r in fitted])
+            )[:PAIRED_MODELS]
             field_of = {n: i for i, n in enumerate(self.names)}
             poses += pair_search(
                 [self.models[n] for n in names],
                 self.field_stack,
                 np.array([field_of[n] for n in names], dtype=np.int64),
-                belief.curves.points,
+                belief.points[: belief.n_curve_points],
                 geometry.point,
                 geometry.normal,
                 touches[sensed],

@@ -54,10 +54,12 @@ PAIR_SPACING_M = 4.0e-3
 DISTANCE_TOLERANCE_M = 3.0e-3
 #: ... and each of its four features (cosines) within this of the data pair's.
 FEATURE_TOLERANCE = 0.25
-#: At most this many pair poses of a model are scored (a seeded draw beyond) ...
-MAX_SCORED = 5_000
+#: At most this many pair poses of a model are scored (a seeded draw beyond), each on the
+#: touches and at most ``SCORE_POINTS`` of the curves' points ...
+MAX_SCORED = 20_000
+SCORE_POINTS = 12
 #: ... the best this many refined on the model's field ...
-N_REFINED = 24
+N_REFINED = 16
 #: ... and this many distinct ones returned.
 N_KEPT = 8
 #: Gauss-Newton steps of the refinement.
@@ -161,15 +163,18 @@ def pair_search(
     """Poses of ``models`` (fields ``which_field`` of ``stack``) that fit the curves'
     points (n, 3) and the ``touches`` (k, 3), started from every model pair matching p
     (``point``, outward ``normal``) and a touch with its sensed outward normal
-    (``touch_normals`` (k, 3); rows with NaN are not paired): scored on the fields (each
-    point's squared distance counted at most ``threshold_m`` squared), the best
-    ``N_REFINED`` of each model refined by Gauss-Newton on all the points (the touches
-    never clipped), ``N_KEPT`` distinct ones kept. Returns (model name,
+    (``touch_normals`` (k, 3); rows with NaN are not paired): scored on the fields at the
+    touches and ``SCORE_POINTS`` of the curves' points (each point's squared distance
+    counted at most ``threshold_m`` squared), the best ``N_REFINED`` of each model
+    refined by Gauss-Newton on all the points (the touches never clipped), ``N_KEPT``
+    distinct ones kept. Returns (model name,
     T_model_from_data (4, 4), mean distance of the curves' points from the model, each
     counted at most ``threshold_m``). Same arguments and seed, same poses."""
     rng = np.random.default_rng(seed)
     paired = np.flatnonzero(np.all(np.isfinite(touch_normals), axis=1))
     data = np.concatenate([curve_points, touches])
+    few = np.unique(np.linspace(0, len(curve_points) - 1, SCORE_POINTS).round().astype(np.int64))
+    scoring = np.concatenate([curve_points[few], touches])
     out: list[tuple[str, Array, float]] = []
     for model, field in zip(models, which_field, strict=True):
         found = [pair_poses(model, point, normal, touches[j], touch_normals[j]) for j in paired]
@@ -180,7 +185,7 @@ def pair_search(
         if len(R) > MAX_SCORED:
             pick = np.sort(rng.choice(len(R), size=MAX_SCORED, replace=False))
             R, t = R[pick], t[pick]
-        values = stack(data @ R.transpose(0, 2, 1) + t[:, None, :], np.full(len(R), field))
+        values = stack(scoring @ R.transpose(0, 2, 1) + t[:, None, :], np.full(len(R), field))
         cost = np.mean(np.minimum(values * values, threshold_m**2), axis=1)
         best = np.argsort(cost, kind="stable")[:N_REFINED]
         R, t, _, _ = fit_on_fields(
