@@ -10,7 +10,9 @@ not, the curves and the touches' contact points are searched again more broadly
 (:meth:`~recognition.surfaces.database.ModelDatabase.broaden`, at most once per touch):
 poses the first search never proposed, but which fit all the contact as well (or better:
 the hypotheses may all be wrong and still explain the contact), compete before an answer
-is called sure or given. It stops once the belief's confidence
+is called sure or given. After a touch that met nothing, or while no hypothesis explains
+the contact, the next touch is planned near the contact made (``LOST_WITHIN_M``), where
+the object surely is. It stops once the belief's confidence
 (:attr:`Belief.confidence`) reaches ``confidence``, the touches are spent, or no allowed
 touch can tell the hypotheses apart. A belief that is sure after the curves makes no
 touch.
@@ -30,13 +32,27 @@ from recognition.surfaces.belief import Belief
 from recognition.surfaces.database import ModelDatabase
 from recognition.surfaces.touch_planning import TouchLimits, TouchPlan
 
-__all__ = ["BROADEN_AT", "Contact", "NoReading", "TouchStep", "Verification", "verify"]
+__all__ = [
+    "BROADEN_AT",
+    "LOST_WITHIN_M",
+    "Contact",
+    "NoReading",
+    "TouchStep",
+    "Verification",
+    "verify",
+]
 
 Array = NDArray[np.float64]
 
 #: When "none of these" is at least this probable, the search is broadened
 #: (:meth:`~recognition.surfaces.database.ModelDatabase.broaden`) before the next touch.
 BROADEN_AT = 0.5
+#: After a touch that met nothing, or while "none of these" is at least ``BROADEN_AT``
+#: probable, the next touch is planned within this distance of the contact made (the
+#: curves' points and the touches'), where the object surely is: the hypotheses that
+#: placed the missed touch may all be wrong, and a contact pairs with p for the broader
+#: search, a miss does not.
+LOST_WITHIN_M = 8.0e-3
 
 
 @dataclass(frozen=True)
@@ -169,6 +185,7 @@ def verify(
     stop = "touches spent"
     broaden_s = 0.0
     avoid = np.zeros((0, 3))  # where touches gave no reading: none is planned near them
+    missed = False  # the last touch met nothing
     for k in range(max_touches):
         if belief.confidence >= confidence:
             stop = "sure"
@@ -180,7 +197,10 @@ def verify(
             if belief.confidence >= confidence:
                 stop = "sure"
                 break
-        plan = database.plan_touch(belief, limits, seed=seed + k, avoid=avoid)
+        lost = missed or belief.unexplained >= BROADEN_AT
+        plan = database.plan_touch(
+            belief, limits, seed=seed + k, avoid=avoid, within_m=LOST_WITHIN_M if lost else None
+        )
         planned = time.perf_counter() - start
         if plan is None:
             stop = "no informative touch"
@@ -193,6 +213,7 @@ def verify(
             avoid = np.concatenate([avoid, plan.point[None]])
         else:
             contact = sensed if sensed is None or isinstance(sensed, Contact) else Contact(sensed)
+            missed = contact is None
             if contact is None:
                 belief = database.update(
                     belief, misses=[(plan.start, plan.direction, plan.travel_m)]

@@ -361,15 +361,28 @@ class ModelDatabase:
         return belief.with_poses(self.models, belief.config.within_window(kept))
 
     def plan_touch(
-        self, belief: Belief, limits: TouchLimits, seed: int = 0, avoid: ArrayLike | None = None
+        self,
+        belief: Belief,
+        limits: TouchLimits,
+        seed: int = 0,
+        avoid: ArrayLike | None = None,
+        within_m: float | None = None,
     ) -> TouchPlan | None:
         """The next touch of greatest expected information gain, none near the points
-        ``avoid`` (k, 3), or None (:func:`recognition.surfaces.touch_planning.plan_touch`)."""
+        ``avoid`` (k, 3), with ``within_m`` near the contact made when it can
+        (:func:`recognition.surfaces.touch_planning.plan_touch`), or None."""
         from recognition.surfaces.touch_planning import plan_touch
 
         field_of = {n: i for i, n in enumerate(self.names)}
         return plan_touch(
-            belief, self.models, self.field_stack, field_of, limits, seed=seed, avoid=avoid
+            belief,
+            self.models,
+            self.field_stack,
+            field_of,
+            limits,
+            seed=seed,
+            avoid=avoid,
+            within_m=within_m,
         )
 
     def _checked_selection(

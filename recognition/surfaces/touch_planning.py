@@ -341,14 +341,18 @@ def plan_touch(
     *,
     seed: int = 0,
     avoid: ArrayLike | None = None,
+    within_m: float | None = None,
 ) -> TouchPlan | None:
     """The touch of greatest expected information gain (module docstring), or None when
     no candidate is allowed or none can tell the hypotheses apart.
 
     ``stack`` holds the models' distance fields, ``field_of`` maps a model name to its
     field in it. No touch is planned within ``limits.min_separation_m`` of contact made
-    or of the points ``avoid`` (k, 3) (touches that gave no reading). Same belief, seed
-    and ``avoid``, same plan.
+    or of the points ``avoid`` (k, 3) (touches that gave no reading). With
+    ``within_m``, only candidates within that distance of contact made are considered
+    while there are any: where the hypotheses may all be wrong, the surface near the
+    data is where a touch is sure to meet the object. Same belief, seed, ``avoid`` and
+    ``within_m``, same plan.
     """
     if not belief.hypotheses:
         return None
@@ -357,6 +361,10 @@ def plan_touch(
     if avoid is not None:
         near = np.concatenate([near, np.asarray(avoid, dtype=np.float64).reshape(-1, 3)])
     P, N = _candidates(belief, models, limits, rng, near)
+    if within_m is not None and len(P):
+        close = cKDTree(belief.points).query(P)[0] <= within_m
+        if close.any():
+            P, N = P[close], N[close]
     if not len(P):
         return None
     directions = -N
