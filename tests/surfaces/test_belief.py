@@ -16,6 +16,7 @@ from recognition import (
     TouchLimits,
     verify,
 )
+from recognition.surfaces.active_touch import LOST_WITHIN_M
 from recognition.surfaces.mesh_model import MeshModel
 from recognition.surfaces.noise_model import huber
 from recognition.surfaces.registration import ALIGNED_SEARCH, FastConfig, data_geometry
@@ -234,6 +235,30 @@ def test_a_touch_with_no_reading_leaves_the_belief_and_is_not_planned_again(data
     # the same belief, seed and avoided point plan the same touch again
     again = database.plan_touch(result.belief, limits, seed=1, avoid=first.plan.point[None])
     np.testing.assert_array_equal(again.point, done.steps[1].plan.point)
+
+
+def test_after_a_touch_that_met_nothing_the_next_is_planned_near_the_contact_made(database):
+    model, synthetic, result = _the_ellipsoids_top(database)
+    calls = []
+
+    def touch(plan):  # the first meets nothing, the others the true surface
+        calls.append(plan)
+        if len(calls) == 1:
+            return None
+        return ray_contact(
+            model.distance, synthetic.T_model_from_data, plan.start, plan.direction, 0.02
+        )
+
+    limits = _limits(synthetic)
+    done = verify(database, result.belief, touch, limits, max_touches=2, confidence=1.0)
+    assert len(done.steps) == 2 and done.steps[0].contact is None
+    near = np.linalg.norm(result.belief.points - done.steps[1].plan.point, axis=1).min()
+    assert near <= LOST_WITHIN_M
+    # planned on the same belief with and without the rule: it is what keeps a touch near
+    free = database.plan_touch(result.belief, limits, seed=3)
+    close = database.plan_touch(result.belief, limits, seed=3, within_m=LOST_WITHIN_M)
+    assert np.linalg.norm(result.belief.points - close.point, axis=1).min() <= LOST_WITHIN_M
+    assert np.linalg.norm(result.belief.points - free.point, axis=1).min() > LOST_WITHIN_M
 
 
 def test_a_last_touch_that_nothing_explains_has_a_broader_search_after_it(database):
