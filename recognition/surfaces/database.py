@@ -97,6 +97,11 @@ class ModelDatabase:
         """The model names, in database order."""
         return list(self.models)
 
+    @property
+    def field_of(self) -> dict[str, int]:
+        """Each model's field in :attr:`field_stack` (its place in database order)."""
+        return {n: i for i, n in enumerate(self.models)}
+
     def prepare(self) -> ModelDatabase:
         """Build the structures every fast-mode recognition searches now (the candidate
         maps, the models' symmetries, the field stack); returns the database. The
@@ -234,7 +239,7 @@ class ModelDatabase:
         geometry = data_geometry(curves, config.geometry)
         chosen = [self.models[n] for n in names]
         if isinstance(config, FastConfig):
-            index = {n: i for i, n in enumerate(self.names)}
+            index = self.field_of
             found = register_all(
                 chosen,
                 curves,
@@ -335,11 +340,10 @@ class ModelDatabase:
             names = list(
                 dict.fromkeys(sorted(weight, key=lambda n: -weight[n]) + [r.model for r in fitted])
             )[:PAIRED_MODELS]
-            field_of = {n: i for i, n in enumerate(self.names)}
             poses += pair_search(
                 [self.models[n] for n in names],
                 self.field_stack,
-                np.array([field_of[n] for n in names], dtype=np.int64),
+                np.array([self.field_of[n] for n in names], dtype=np.int64),
                 belief.points[: belief.n_curve_points],
                 geometry.point,
                 geometry.normal,
@@ -352,7 +356,7 @@ class ModelDatabase:
         # poses become hypotheses (Belief.of): those that fit the curves within the window
         # of the least error (all of them: a rival may fit the curves a little worse and
         # the touches better)
-        field_of = {n: i for i, n in enumerate(self.names)}
+        field_of = self.field_of
         kept = []
         for name, T, error in poses:
             placed = touches @ T[:3, :3].T + T[:3, 3]
@@ -373,12 +377,11 @@ class ModelDatabase:
         (:func:`recognition.surfaces.touch_planning.plan_touch`), or None."""
         from recognition.surfaces.touch_planning import plan_touch
 
-        field_of = {n: i for i, n in enumerate(self.names)}
         return plan_touch(
             belief,
             self.models,
             self.field_stack,
-            field_of,
+            self.field_of,
             limits,
             seed=seed,
             avoid=avoid,
