@@ -12,7 +12,7 @@ poses the first search never proposed, but which fit all the contact as well (or
 the hypotheses may all be wrong and still explain the contact), compete before an answer
 is called sure or given. After a touch that met nothing, or while no hypothesis explains
 the contact, the next touch is planned near the contact made (``LOST_WITHIN_M``), where
-the object surely is. It stops once the belief's confidence
+the object surely is, when a touch there can tell the hypotheses apart. It stops once the belief's confidence
 (:attr:`Belief.confidence`) reaches ``confidence``, the touches are spent, or no allowed
 touch can tell the hypotheses apart. A belief that is sure after the curves makes no
 touch.
@@ -49,9 +49,9 @@ Array = NDArray[np.float64]
 BROADEN_AT = 0.5
 #: After a touch that met nothing, or while "none of these" is at least ``BROADEN_AT``
 #: probable, the next touch is planned within this distance of the contact made (the
-#: curves' points and the touches'), where the object surely is: the hypotheses that
-#: placed the missed touch may all be wrong, and a contact pairs with p for the broader
-#: search, a miss does not.
+#: curves' points and the touches'), where the object surely is, when a touch there can
+#: tell the hypotheses apart: the hypotheses that placed the missed touch may all be
+#: wrong, and a contact pairs with p for the broader search, a miss does not.
 LOST_WITHIN_M = 8.0e-3
 
 
@@ -197,10 +197,13 @@ def verify(
             if belief.confidence >= confidence:
                 stop = "sure"
                 break
-        lost = missed or belief.unexplained >= BROADEN_AT
-        plan = database.plan_touch(
-            belief, limits, seed=seed + k, avoid=avoid, within_m=LOST_WITHIN_M if lost else None
-        )
+        plan = None
+        if missed or belief.unexplained >= BROADEN_AT:
+            plan = database.plan_touch(
+                belief, limits, seed=seed + k, avoid=avoid, within_m=LOST_WITHIN_M
+            )
+        if plan is None:  # not lost, or no touch near the contact tells anything
+            plan = database.plan_touch(belief, limits, seed=seed + k, avoid=avoid)
         planned = time.perf_counter() - start
         if plan is None:
             stop = "no informative touch"
