@@ -12,10 +12,10 @@ poses the first search never proposed, but which fit all the contact as well (or
 the hypotheses may all be wrong and still explain the contact), compete before an answer
 is called sure or given. After a touch that met nothing, or while no hypothesis explains
 the contact, the next touch is planned near the contact made (``LOST_WITHIN_M``), where
-the object surely is, when a touch there can tell the hypotheses apart. It stops once the belief's confidence
-(:attr:`Belief.confidence`) reaches ``confidence``, the touches are spent, or no allowed
-touch can tell the hypotheses apart. A belief that is sure after the curves makes no
-touch.
+the object surely is, when a touch there can tell the hypotheses apart. It stops once the
+belief's confidence (:attr:`Belief.confidence`) reaches ``confidence``, the touches are
+spent, or no allowed touch can tell the hypotheses apart. A belief that is sure after the
+curves makes no touch.
 """
 
 from __future__ import annotations
