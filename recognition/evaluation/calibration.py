@@ -83,9 +83,9 @@ def touch_summary(records: Sequence[Record]) -> dict[str, Any] | None:
     """What the touches did, JSON-ready (None when no record made touches): answers right
     after the curves and after the touches, the median distance of the answer's p from the
     truth after the touches (an answer naming another model counts as infinitely far;
-    None when that makes the median infinite),
-    touches made (median, mean, max), the sessions sure after the curves that made none,
-    and the planning and update time per touch (median, mean, p90, max)."""
+    None when that makes the median infinite), touches made (median, mean, max), the
+    sessions sure after the curves that made none, and the planning and update time per
+    touch (median, mean, p90, max)."""
     touched = [r for r in records if r.touches is not None and r.confidence is not None]
     if not touched:
         return None
@@ -94,7 +94,7 @@ def touch_summary(records: Sequence[Record]) -> dict[str, Any] | None:
         [t for r in touched if r.touches is not None for t in r.touches["recognition_times_s"]]
     )
     sure_first = [r for r in touched if r.confidence is not None and r.confidence >= SURE]
-    located = np.array([_located_mm(r) for r in touched])
+    located = float(np.median([_located_mm(r) for r in touched]))
     return {
         "instances": len(touched),
         "right_after_curves": float(np.mean([r.answered_right() for r in touched])),
@@ -102,9 +102,7 @@ def touch_summary(records: Sequence[Record]) -> dict[str, Any] | None:
         "recognized_after_touches": float(
             np.mean([bool(r.touches and r.touches["success"]) for r in touched])
         ),
-        "localisation_after_touches_median_mm": (
-            float(np.median(located)) if np.isfinite(np.median(located)) else None
-        ),
+        "localisation_after_touches_median_mm": located if np.isfinite(located) else None,
         "touches_median": float(np.median(made)),
         "touches_mean": float(np.mean(made)),
         "touches_max": int(made.max()),

@@ -356,13 +356,13 @@ class ModelDatabase:
         # poses become hypotheses (Belief.of): those that fit the curves within the window
         # of the least error (all of them: a rival may fit the curves a little worse and
         # the touches better)
-        field_of = self.field_of
-        kept = []
-        for name, T, error in poses:
-            placed = touches @ T[:3, :3].T + T[:3, 3]
-            if np.all(np.abs(self.field_stack(placed[None], [field_of[name]])) <= RIVAL_MISS_M):
-                kept.append((name, T, error))
-        return belief.with_poses(self.models, belief.config.within_window(kept))
+        if poses:
+            T = np.array([pose for _, pose, _ in poses])
+            placed = touches @ T[:, :3, :3].transpose(0, 2, 1) + T[:, None, :3, 3]
+            which = np.array([self.field_of[name] for name, _, _ in poses])
+            meets = np.all(np.abs(self.field_stack(placed, which)) <= RIVAL_MISS_M, axis=1)
+            poses = [p for p, ok in zip(poses, meets, strict=True) if ok]
+        return belief.with_poses(self.models, belief.config.within_window(poses))
 
     def plan_touch(
         self,

@@ -422,7 +422,7 @@ class MeshModel:
         """
         if self._dense is None:
             start = time.perf_counter()
-            _, vertices = np.unique(self.cell_keys(CANDIDATE_SPACING_M), return_index=True)
+            vertices = self.one_per_cell(CANDIDATE_SPACING_M)
             parts = [
                 paraboloid_curvatures(
                     self.vertices, self.normals, chunk, (CANDIDATE_FIT_SIZE,), self.tree
@@ -509,6 +509,12 @@ class MeshModel:
             keys = (cell[:, 0] * dims[1] + cell[:, 1]) * dims[2] + cell[:, 2]
             self._cell_keys[spacing] = keys
         return keys
+
+    def one_per_cell(self, spacing: float) -> IntArray:
+        """(m,) int64 indices of one vertex per occupied cubic cell of side ``spacing``
+        (metres), the first in vertex order, in the order of the cells' keys."""
+        _, first = np.unique(self.cell_keys(spacing), return_index=True)
+        return np.asarray(first, dtype=np.int64)
 
     @property
     def extent_m(self) -> float:

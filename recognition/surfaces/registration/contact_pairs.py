@@ -92,12 +92,6 @@ def pair_features(x1: Array, n1: Array, x2: Array, n2: Array) -> tuple[Array, Ar
     return D, features, frames
 
 
-def _samples(model: MeshModel) -> IntArray:
-    """One vertex per cubic cell of ``PAIR_SPACING_M`` (the first in vertex order)."""
-    _, first = np.unique(model.cell_keys(PAIR_SPACING_M), return_index=True)
-    return np.asarray(first, dtype=np.int64)
-
-
 def pair_poses(
     model: MeshModel,
     point: Array,
@@ -121,7 +115,7 @@ def pair_poses(
     if not np.all(np.isfinite(frame)):
         return np.zeros((0, 3, 3)), np.zeros((0, 3))
     middle = 0.5 * (one[0][0] + one[2][0])
-    sample = _samples(model)
+    sample = model.one_per_cell(PAIR_SPACING_M)
     X, N = model.vertices[sample], model.normals[sample]
     squares = np.sum(X * X, axis=1)
     low, high = max(D[0] - distance_tolerance_m, 0.0) ** 2, (D[0] + distance_tolerance_m) ** 2
