@@ -1,16 +1,30 @@
-"""Process pools that stop at once on Ctrl-C: the workers ignore SIGINT, the parent ends them."""
+"""Process pools that stop at once on Ctrl-C: the workers ignore SIGINT, the parent ends them.
+
+A ``KeyboardInterrupt`` that lands inside the standard library's pool code can land after
+a lock is taken but before the ``with`` block that releases it is entered (CPython does
+not release it then): the pool's manager thread then waits on that lock for ever and the
+interpreter never exits. Fresh-clone runs hung so after "interrupted" twice: once with
+the manager thread waiting on the work-id queue's lock (taken in ``submit``), once on a
+future's condition (``as_completed`` takes every future's). Where the main thread calls
+into that code (``submit``, waiting for results with :func:`completed`), Ctrl-C is held
+and raised as the call returns.
+"""
 
 from __future__ import annotations
 
 import contextlib
 import multiprocessing
+import queue
 import signal
 import threading
-from collections.abc import Callable, Iterator
-from concurrent.futures import ProcessPoolExecutor
+from collections.abc import Callable, Iterable, Iterator
+from concurrent.futures import Future, ProcessPoolExecutor
 from typing import Any
 
-__all__ = ["process_pool"]
+__all__ = ["completed", "process_pool"]
+
+#: While waiting for a result, a held Ctrl-C is raised within this many seconds.
+_POLL_S = 0.1
 
 
 def _ignore_interrupts(
@@ -22,29 +36,52 @@ def _ignore_interrupts(
         initializer(*initargs)
 
 
-class _Pool(ProcessPoolExecutor):
-    """A process pool whose ``submit`` (``map`` calls it) defers Ctrl-C to its end.
+@contextlib.contextmanager
+def _interrupts_held() -> Iterator[list[int]]:
+    """In the main thread, Ctrl-C inside the block is recorded in the yielded list, not
+    raised where it lands, and raised as ``KeyboardInterrupt`` when the block ends
+    (elsewhere nothing changes)."""
+    held: list[int] = []
+    if threading.current_thread() is not threading.main_thread():
+        yield held
+        return
+    previous = signal.signal(signal.SIGINT, lambda number, _frame: held.append(number))
+    try:
+        yield held
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    if held:
+        raise KeyboardInterrupt
 
-    A ``KeyboardInterrupt`` raised inside ``submit`` can land after a queue's lock is
-    taken but before the ``with`` block that releases it is entered (CPython does not
-    release it then): the pool's manager thread then waits on that lock for ever and the
-    interpreter never exits. A fresh-clone run hung so once after "interrupted", its
-    manager thread waiting on the work-id queue's lock; 24 interrupted runs under load
-    did not reproduce it. In the main thread the interrupt is now held while the call is
-    queued and raised as it returns.
-    """
+
+class _Pool(ProcessPoolExecutor):
+    """A process pool whose ``submit`` (``map`` calls it) defers Ctrl-C to its end
+    (module docstring)."""
 
     def submit(self, fn: Callable[..., Any], /, *args: Any, **kwargs: Any) -> Any:
-        if threading.current_thread() is not threading.main_thread():
+        with _interrupts_held():
             return super().submit(fn, *args, **kwargs)
-        held: list[int] = []
-        previous = signal.signal(signal.SIGINT, lambda number, _frame: held.append(number))
-        try:
-            return super().submit(fn, *args, **kwargs)
-        finally:
-            signal.signal(signal.SIGINT, previous)
-            if held:
-                raise KeyboardInterrupt
+
+
+def completed(futures: Iterable[Future[Any]]) -> Iterator[Future[Any]]:
+    """The ``futures`` as they complete, as :func:`concurrent.futures.as_completed` gives
+    them, but with Ctrl-C held while waiting and raised between waits (within
+    ``_POLL_S``; module docstring)."""
+    done: queue.SimpleQueue[Future[Any]] = queue.SimpleQueue()
+    with _interrupts_held():
+        pending = list(futures)
+        for future in pending:
+            future.add_done_callback(done.put)
+    for _ in pending:
+        with _interrupts_held() as held:
+            while True:
+                try:
+                    future = done.get(timeout=_POLL_S)
+                    break
+                except queue.Empty:
+                    if held:
+                        break
+        yield future
 
 
 @contextlib.contextmanager

@@ -17,7 +17,7 @@ from recognition.evaluation.models import DatabaseHandle, load_database
 from recognition.evaluation.ray_backend import run_on_ray
 from recognition.evaluation.records import Record, read_results
 from recognition.evaluation.workers import worker_init, worker_run
-from recognition.pools import process_pool
+from recognition.pools import completed, process_pool
 
 __all__ = ["BACKENDS", "run"]
 
@@ -145,9 +145,7 @@ def _run_pool(
 ) -> None:
     """``todo`` in a local pool of ``workers`` processes, each holding the database; an
     interrupt or an error ends the workers at once."""
-    from concurrent.futures import as_completed
-
     with process_pool(min(workers, len(todo)), worker_init, (database,)) as pool:
         futures = {pool.submit(worker_run, job): job for job in todo}
-        for future in as_completed(futures):
+        for future in completed(futures):
             record(futures[future], future.result())
