@@ -13,6 +13,7 @@ from recognition.evaluation.jobs import Job
 from recognition.evaluation.models import DatabaseHandle
 from recognition.evaluation.records import Record
 from recognition.evaluation.workers import worker_init, worker_run
+from recognition.pools import limit_native_threads
 
 __all__ = ["RAY_CONNECT_TIMEOUT_S", "RAY_INIT_TIMEOUT_S", "check_ray_address", "run_on_ray"]
 
@@ -31,6 +32,7 @@ class _Worker:
     """A Ray actor holding the database."""
 
     def __init__(self, handle: DatabaseHandle) -> None:
+        limit_native_threads(1)  # the actor reserves one CPU (run_on_ray)
         worker_init(handle)
 
     def run(self, job: Job) -> list[Record]:

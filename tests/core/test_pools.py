@@ -8,7 +8,7 @@ from concurrent.futures import ThreadPoolExecutor
 
 import pytest
 
-from recognition.pools import completed
+from recognition.pools import completed, process_pool, worker_share
 
 
 def test_completed_gives_every_future_once_as_it_completes():
@@ -32,3 +32,17 @@ def test_a_ctrl_c_while_waiting_is_raised_between_waits_and_the_handler_restored
         release.set()
     assert 0.15 < waited < 2.0  # raised soon after the signal, not when the work ended
     assert signal.getsignal(signal.SIGINT) is before
+
+
+def _blas_threads() -> list[int]:
+    from threadpoolctl import threadpool_info
+
+    return [pool["num_threads"] for pool in threadpool_info() if pool["user_api"] == "blas"]
+
+
+def test_a_pool_worker_uses_its_share_of_the_cores():
+    with process_pool(2) as pool:
+        threads = pool.submit(_blas_threads).result()
+    assert threads and all(n == worker_share(2) for n in threads)
+    assert worker_share(2) == max(1, (os.cpu_count() or 1) // 2)
+    assert worker_share(10**6) == 1  # never none
