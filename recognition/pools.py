@@ -32,7 +32,7 @@ from typing import Any
 
 from threadpoolctl import threadpool_limits
 
-__all__ = ["completed", "limit_native_threads", "process_pool", "worker_share"]
+__all__ = ["completed", "limit_native_threads", "process_pool", "usable_cores", "worker_share"]
 
 #: While waiting for a result, a held Ctrl-C is raised within this many seconds.
 _POLL_S = 0.1
@@ -43,10 +43,18 @@ def limit_native_threads(threads: int) -> None:
     threadpool_limits(limits=max(1, threads))
 
 
+def usable_cores() -> int:
+    """The cores this process may run on (its CPU affinity where the platform tells it,
+    else the machine's), at least one."""
+    if hasattr(os, "sched_getaffinity"):
+        return max(1, len(os.sched_getaffinity(0)))
+    return os.cpu_count() or 1
+
+
 def worker_share(workers: int) -> int:
-    """The threads of one of ``workers`` processes that run at once: the machine's cores
+    """The threads of one of ``workers`` processes that run at once: the usable cores
     over ``workers``, at least one."""
-    return max(1, (os.cpu_count() or 1) // max(workers, 1))
+    return max(1, usable_cores() // max(workers, 1))
 
 
 def _worker_start(
