@@ -311,6 +311,7 @@ class ModelDatabase:
         if belief.curves is None or belief.broadened == len(belief.windows):
             return belief
         touches = belief.points[belief.n_curve_points :]
+        field_of = self.field_of
         config = self.registration if isinstance(self.registration, FastConfig) else FastConfig()
         mismatch = max(config.model_mismatch_m, belief.noise.model_mismatch_m)
         wide = replace(config, search=ALIGNED_SEARCH, fallbacks=(), model_mismatch_m=mismatch)
@@ -343,7 +344,7 @@ class ModelDatabase:
             poses += pair_search(
                 [self.models[n] for n in names],
                 self.field_stack,
-                np.array([self.field_of[n] for n in names], dtype=np.int64),
+                np.array([field_of[n] for n in names], dtype=np.int64),
                 belief.points[: belief.n_curve_points],
                 geometry.point,
                 geometry.normal,
@@ -359,7 +360,7 @@ class ModelDatabase:
         if poses:
             T = np.array([pose for _, pose, _ in poses])
             placed = touches @ T[:, :3, :3].transpose(0, 2, 1) + T[:, None, :3, 3]
-            which = np.array([self.field_of[name] for name, _, _ in poses])
+            which = np.array([field_of[name] for name, _, _ in poses])
             meets = np.all(np.abs(self.field_stack(placed, which)) <= RIVAL_MISS_M, axis=1)
             poses = [p for p, ok in zip(poses, meets, strict=True) if ok]
         return belief.with_poses(self.models, belief.config.within_window(poses))
