@@ -318,24 +318,44 @@ class Belief:
         """The belief with further candidate poses ``(model, T_model_from_data)`` (a
         broader search's), refined and scored with its hypotheses on all the contact;
         marked ``broadened`` with the touches it had. A new pose's touches count as it
-        predicted them refined on the curves alone."""
+        would have predicted each in turn (:meth:`_in_turn`), as the hypotheses' did."""
         known = [(h.model, h.T_model_from_data, h.touch_evidence) for h in self.hypotheses]
         usable = [(n, np.asarray(T, float), 0.0) for n, T in poses if n in models]
         if usable and len(self.windows):
-            curves = replace(
-                self,
-                points=self.points[: self.n_curve_points],
-                misses=(),
-                windows=np.zeros(0),
-                normals=np.zeros((0, 3)),
-            )
-            fitted = curves._fitted(usable, models, curves._whitening())
-            scores = self._predicted(fitted, models, self._whitening(), 0)
-            usable = [
-                (h.model, h.T_model_from_data, score)
-                for h, score in zip(fitted, scores, strict=True)
-            ]
+            usable = self._in_turn(usable, models)
         return replace(self._rescored([*known, *usable], models), broadened=len(self.windows))
+
+    def _in_turn(
+        self, poses: Sequence[tuple[str, Array, float]], models: Mapping[str, MeshModel]
+    ) -> list[tuple[str, Array, float]]:
+        """New poses ``(model, T_model_from_data, _)`` with their touches' evidence as
+        each touch would have been predicted when it was made: touch i at the pose
+        refined on the curves and the touches before it, with that fit's uncertainty
+        (the chain rule, p(t_1 .. t_k) = prod_i p(t_i | curves, t_<i)). Each pose ends
+        refined on the contact before the last touch."""
+        n = self.n_curve_points
+        current = list(poses)
+        total: Array = np.zeros(len(current))
+        for i in range(len(self.windows)):
+            before = replace(
+                self,
+                points=self.points[: n + i],
+                misses=(),
+                windows=self.windows[:i],
+                normals=self.normals[:i],
+            )
+            fitted = before._fitted(current, models, before._whitening())
+            upto = replace(
+                self,
+                points=self.points[: n + i + 1],
+                windows=self.windows[: i + 1],
+                normals=self.normals[: i + 1],
+            )
+            if i == 0:  # _fitted groups the poses by model: keep the totals in its order
+                total = np.zeros(len(fitted))
+            total += np.array(upto._predicted(fitted, models, upto._whitening(), i))
+            current = [(h.model, h.T_model_from_data, 0.0) for h in fitted]
+        return [(name, T, float(e)) for (name, T, _), e in zip(current, total, strict=True)]
 
     def _rescored(
         self,

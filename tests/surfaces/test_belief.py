@@ -477,3 +477,33 @@ def test_bad_arguments_are_refused_with_typed_errors(database):
         database.update(result.belief, synthetic.curves.intersection[None], normals=np.ones(3))
     with pytest.raises(InvalidArgument, match="model_mismatch_m"):
         NoiseModel(model_mismatch_m=-1.0)
+
+
+def test_a_pose_added_after_touches_counts_them_as_a_hypothesis_that_made_them(database):
+    # short noisy curves leave the blob's pose loose; two touches pin it. A pose added
+    # after them (a broader search's) predicts each touch in turn, the second at the pose
+    # the first pinned: exactly as a hypothesis that was there when they were made (no
+    # valleys explored, so that one pose is followed), and more than the pose the curves
+    # alone leave loose predicts them
+    model = database["blob"]
+    synthetic = _curves(model, 2500, seed=1, noise=0.05e-3, n_points=11, spacing_m=1.2e-3)
+    found = database.recognize(synthetic.curves, models=["blob"]).belief
+    p = synthetic.point_in_model
+    data_from_model = np.linalg.inv(synthetic.T_model_from_data)
+    distance = np.linalg.norm(model.vertices - p, axis=1)
+    above = 1e3 * (model.vertices[:, 2] < p[2])
+    v = [int(np.argmin(np.abs(distance - d) + above)) for d in (12e-3, 20e-3)]
+    touched = model.vertices[v] @ data_from_model[:3, :3].T + data_from_model[:3, 3]
+    start = [("blob", found.best.T_model_from_data)]
+    config = replace(found.config, explore_hypotheses=0)
+    before = replace(found, hypotheses=(), config=config).with_poses(database.models, start)
+    made = database.update(database.update(before, touched[:1]), touched[1:])
+    added = replace(made, hypotheses=()).with_poses(database.models, start)
+    assert len(made.hypotheses) == len(added.hypotheses) == 1
+    assert added.best.touch_evidence == pytest.approx(made.best.touch_evidence, abs=1e-6)
+    assert added.best.log_likelihood == pytest.approx(made.best.log_likelihood, abs=1e-6)
+    loose = replace(made, hypotheses=())._predicted(
+        before.hypotheses, database.models, made._whitening(), 0
+    )
+    assert loose[0] < made.best.touch_evidence - 0.1
+
