@@ -268,12 +268,9 @@ def test_records_read_back_as_written(uninterrupted: list[bench.Record], tmp_pat
     assert [r.dumps() for r in again] == path.read_text().splitlines()
     first = json.loads(path.read_text().splitlines()[0])
     assert list(first)[:5] == ["instance", "model", "index", "vertex", "seed"]
-    assert list(first)[-4:] == [
-        "localization_error_mm",
-        "confidence",
-        "answer_error_mm",
-        "settings",
-    ]
+    last = ["localization_error_mm", "confidence", "answer_error_mm"]
+    last += ["truth_fit"] if "truth_fit" in first else []  # a wrong answer's diagnosis
+    assert list(first)[-len(last) - 1 :] == [*last, "settings"]
 
 
 def test_instance_facts_and_errors_are_kept_apart() -> None:
@@ -561,6 +558,12 @@ def test_touching_jobs_record_their_touches_under_their_own_settings(
         # a sure answer after the curves makes no touch
         if record.confidence >= 0.99:
             assert touches["made"] == 0 and touches["stop"] == "sure"
+        # a wrong answer carries its diagnosis, a right one none
+        for right, fit in (
+            (record.answered_right(), record.truth_fit),
+            (record.answered_right(True), touches.get("truth_fit")),
+        ):
+            assert (fit is None) == right, (right, fit)
     # resumed, not redone: the same records read back
     assert bench.run(database_dir, touching, path, progress=False) == records
 

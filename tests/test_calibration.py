@@ -2,10 +2,18 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
-from recognition.evaluation.calibration import reliability, touch_summary, touches_section
+from recognition.evaluation.calibration import (
+    miss_causes,
+    reliability,
+    touch_summary,
+    touches_section,
+)
+from recognition.evaluation.diagnosis import cause
 from recognition.evaluation.records import Record
 
 
@@ -89,3 +97,25 @@ def test_touch_summary_counts_other_models_as_infinitely_far() -> None:
     most_wrong = touch_summary(wrong + records[:1])
     assert most_wrong is not None and most_wrong["localisation_after_touches_median_mm"] is None
     assert "most answers name another model" in touches_section(wrong + records[:1])
+
+
+def test_wrong_answers_are_counted_by_the_cause_their_truth_fit_names() -> None:
+    # the truth ten times likelier than the answer: the search missed it; within ten
+    # times: a tie; the answer ten times likelier, or the truth sliding off itself: the data
+    fits = [
+        {"log_ratio": 3.0, "error_mm": 0.2},
+        {"log_ratio": -1.0, "error_mm": 0.2},
+        {"log_ratio": -3.0, "error_mm": 0.2},
+        {"log_ratio": 5.0, "error_mm": 4.0},
+        None,
+    ]
+    assert [cause(f) for f in fits] == ["search", "tie", "data", "data", None]
+    records = [replace(_record(0.3, 5.0), truth_fit=f) for f in fits]
+    records.append(_record(0.999, 0.1))  # right: no diagnosis, not counted
+    counts = miss_causes(records)
+    assert counts == {"wrong": 5, "search": 1, "tie": 1, "data": 2, "unknown": 1}
+    touched = [replace(_record(0.3, 5.0, after=0.4, after_model="dog", made=5), truth_fit=None)]
+    touched[0].touches["truth_fit"] = {"log_ratio": 4.0, "error_mm": 0.1}  # type: ignore[index]
+    assert miss_causes(touched, after_touches=True)["search"] == 1
+    assert miss_causes(touched)["unknown"] == 1
+    assert "1 where the true pose fits all the contact" in touches_section(touched)

@@ -10,18 +10,20 @@ right; the expected calibration error (ECE) is the mean gap, weighted by the bin
 from __future__ import annotations
 
 import time
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from recognition.evaluation.diagnosis import CAUSES, cause
 from recognition.evaluation.records import Record, read_results
 from recognition.evaluation.reports import machine
 from recognition.files import write_json_atomic
 
 __all__ = [
     "SURE",
+    "miss_causes",
     "pooled_report",
     "reliability",
     "reliability_figure",
@@ -117,6 +119,32 @@ def touch_summary(records: Sequence[Record]) -> dict[str, Any] | None:
     }
 
 
+def miss_causes(records: Sequence[Record], after_touches: bool = False) -> dict[str, int]:
+    """The wrong answers (after the curves, or after the touches) by cause
+    (:func:`~recognition.evaluation.diagnosis.cause`): ``wrong``, then the count of each
+    of :data:`~recognition.evaluation.diagnosis.CAUSES` and ``unknown`` (no diagnosis:
+    the true pose unknown, or a record written without one)."""
+    counts = dict.fromkeys(("wrong", *CAUSES, "unknown"), 0)
+    for r in records:
+        if r.confidence is None or r.answered_right(after_touches):
+            continue
+        touched = after_touches and r.touches is not None
+        fit = r.touches.get("truth_fit") if touched and r.touches else r.truth_fit
+        counts["wrong"] += 1
+        counts[cause(fit) or "unknown"] += 1
+    return counts
+
+
+def _causes_text(counts: Mapping[str, int]) -> str:
+    """Markdown: the wrong answers by cause, in words."""
+    return (
+        f"{counts['wrong']} wrong: {counts['search']} where the true pose fits all the "
+        f"contact at least ten times likelier than the answer (no search proposed it), "
+        f"{counts['tie']} within ten times either way, {counts['data']} where the data "
+        f"favour the answer" + (f", {counts['unknown']} not diagnosed" if counts["unknown"] else "")
+    )
+
+
 def _located_mm(record: Record) -> float:
     """How far the answer after the touches puts p from the truth, mm (inf: another model
     or none)."""
@@ -180,6 +208,15 @@ def touches_section(records: Sequence[Record], figure_name: str | None = None) -
             )
             + ".",
         ]
+    diagnosed = [(name, miss_causes(records, name == "after the touches")) for name, _ in stages]
+    if any(c["wrong"] > c["unknown"] for _, c in diagnosed):
+        lines += [
+            "",
+            "Wrong answers by cause (the true pose scored as a broader search's pose, "
+            "`recognition.evaluation.diagnosis`): "
+            + "; ".join(f"{name}, {_causes_text(c)}" for name, c in diagnosed)
+            + ".",
+        ]
     if figure_name:
         lines += ["", f"![reliability]({figure_name})"]
     return "\n".join(lines) + "\n"
@@ -238,6 +275,7 @@ def pooled_report(
         files[Path(path).name] = {
             "after_curves": _brief(reliability(records)),
             "after_touches": _brief(reliability(records, after_touches=True)),
+            "causes_after_touches": miss_causes(records, after_touches=True),
         }
     command = "python scripts/calibration.py " + " ".join(arguments)
     payload: dict[str, Any] = {
@@ -246,6 +284,8 @@ def pooled_report(
         "after_curves": reliability(pooled),
         "after_touches": reliability(pooled, after_touches=True),
         "touches": touch_summary(pooled),
+        "causes_after_curves": miss_causes(pooled),
+        "causes_after_touches": miss_causes(pooled, after_touches=True),
     }
     write_json_atomic(out_dir / f"{name}_reliability.json", payload)
     figure = out_dir / f"{name}_reliability.png"
@@ -257,15 +297,17 @@ def pooled_report(
         f"Date: {time.strftime('%Y-%m-%d %H:%M')}; machine: {machine()}.",
         "",
         "| records | answers | right after the curves | sure | right among sure | "
-        "right after the touches | sure | right among sure |",
-        "|---|---|---|---|---|---|---|---|",
+        "right after the touches | sure | right among sure | wrong: search, tie, data |",
+        "|---|---|---|---|---|---|---|---|---|",
     ]
     for file, row in files.items():
-        a, b = row["after_curves"], row["after_touches"]
+        a, b, c = row["after_curves"], row["after_touches"], row["causes_after_touches"]
         lines.append(
             f"| `{file}` | {a['answers']} | {_percent(a['right'])} | {a['sure']} | "
             f"{_percent(a['sure_right'])} | {_percent(b['right'])} | {b['sure']} | "
-            f"{_percent(b['sure_right'])} |"
+            f"{_percent(b['sure_right'])} | {c['search']}, {c['tie']}, {c['data']}"
+            + (f" ({c['unknown']} not diagnosed)" if c["unknown"] else "")
+            + " |"
         )
     text = "\n".join(lines) + "\n\n" + touches_section(pooled, figure.name)
     (out_dir / f"{name}.md").write_text(text)

@@ -82,6 +82,9 @@ class Instance:
         touches (:func:`recognition.verify`); None: the source cannot touch.
     touch_limits : TouchLimits or None
         The touches ``touch`` can make.
+    T_model_from_data : (4, 4) float or None
+        The true pose, model from the curves' frame (the ground truth of the diagnosis of
+        a wrong answer, :mod:`~recognition.evaluation.diagnosis`); None: not known.
     """
 
     curves: DataCurves | None
@@ -90,6 +93,7 @@ class Instance:
     reference_curves: DataCurves | None = None
     touch: Callable[[TouchPlan], Contact | NDArray[np.float64] | None] | None = None
     touch_limits: TouchLimits | None = None
+    T_model_from_data: NDArray[np.float64] | None = None
 
 
 class InstanceSource(Protocol):

@@ -12,6 +12,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from recognition.errors import DegenerateGeometry, InvalidCurveData, InvalidModel
+from recognition.evaluation.diagnosis import truth_fit
 from recognition.evaluation.instances import Instance, InstanceSource, InstanceSpec
 from recognition.evaluation.models import Database
 from recognition.evaluation.records import Record, ReferenceRecord
@@ -173,7 +174,29 @@ def _touched(
         "answer_error_mm": _answer_error_mm(done.belief, true_model, instance.point_in_model),
         "confidences": [step.confidence for step in done.steps],
         "recognition_times_s": [step.recognition_time_s for step in done.steps],
+        "truth_fit": _truth_fit(database, done.belief, instance, true_model),
     }
+
+
+def _truth_fit(
+    database: Database, belief: Belief | None, instance: Instance, true_model: str
+) -> dict[str, Any] | None:
+    """How the true pose fits the belief's contact against a wrong answer
+    (:func:`~recognition.evaluation.diagnosis.truth_fit`); None for a right answer, or
+    without a belief or the true pose."""
+    if (
+        belief is None
+        or instance.T_model_from_data is None
+        or instance.point_in_model is None
+        or not isinstance(database, ModelDatabase)
+    ):
+        return None
+    error = _answer_error_mm(belief, true_model, instance.point_in_model)
+    if error is not None and error <= 1.0:
+        return None
+    return truth_fit(
+        database.models, belief, true_model, instance.T_model_from_data, instance.point_in_model
+    )
 
 
 def _recognize(
@@ -286,6 +309,7 @@ def run_job(database: Database, job: Job) -> list[Record]:
                 touches=_touched(
                     database, found.result, instance, spec.model, job.touches, spec.seed
                 ),
+                truth_fit=_truth_fit(database, belief, instance, spec.model),
             )
         )
     return records

@@ -6,7 +6,7 @@ the instance (:attr:`Record.info`, e.g. ``probe_time_s``; a failed instance's ``
 then ``instance_time_s``, ``method``, ``recognized``, ``success``, ``time_s``,
 ``errors_mm``, ``times_s`` and, when known, ``candidates``, ``k1``, ``k2``, ``error``
 (the recognition failed), ``localization_error_mm``, ``reference``, ``confidence`` and
-``answer_error_mm``, ``touches`` and ``settings``.
+``answer_error_mm``, ``touches``, ``truth_fit`` and ``settings``.
 Reading a line back (:meth:`Record.from_json`) takes the keys between ``seed`` and
 ``instance_time_s`` as the source's facts.
 """
@@ -148,7 +148,12 @@ class Record:
     touches : mapping or None
         Verification touches (``--touches N``): ``made`` (count), ``stop``,
         ``recognized``, ``success``, ``confidence``, ``answer_error_mm`` after them,
-        ``recognition_times_s`` (planning and update of each touch).
+        ``recognition_times_s`` (planning and update of each touch), and, when the answer
+        after them is wrong, ``truth_fit``.
+    truth_fit : mapping or None
+        When the answer after the curves is wrong and the true pose is known: how the
+        truth fits the curves against the answer (``log_ratio``, ``error_mm``;
+        :func:`~recognition.evaluation.diagnosis.truth_fit`).
     settings : str or None
         Hash of the source and registration settings (set by the runner).
     """
@@ -176,6 +181,7 @@ class Record:
     confidence: float | None = None
     answer_error_mm: float | None = None
     touches: Mapping[str, Any] | None = None
+    truth_fit: Mapping[str, Any] | None = None
 
     def answered_right(self, after_touches: bool = False, radius_mm: float = 1.0) -> bool:
         """The belief's answer names the true model and puts p within ``radius_mm`` of
@@ -218,6 +224,8 @@ class Record:
             out["answer_error_mm"] = self.answer_error_mm
         if self.touches is not None:
             out["touches"] = dict(self.touches)
+        if self.truth_fit is not None:
+            out["truth_fit"] = dict(self.truth_fit)
         if self.settings is not None:
             out["settings"] = self.settings
         return out
@@ -250,6 +258,7 @@ class Record:
             confidence=payload.get("confidence"),
             answer_error_mm=payload.get("answer_error_mm"),
             touches=None if payload.get("touches") is None else dict(payload["touches"]),
+            truth_fit=None if payload.get("truth_fit") is None else dict(payload["truth_fit"]),
         )
 
     def with_settings(self, settings: str) -> Record:

@@ -126,6 +126,7 @@ class SyntheticSource:
             np.asarray(synthetic.point_in_model),
             touch=touch,
             touch_limits=limits,
+            T_model_from_data=np.asarray(synthetic.T_model_from_data),
         )
 
 

@@ -238,7 +238,9 @@ class SimulatedSource:
             curves, reference = true_curves, session.curves
         point = data_point_in_object(curves, truth.T_world_from_object)
         toucher = RobotToucher(session)
-        return Instance(curves, point, info, reference, toucher, toucher.limits)
+        return Instance(
+            curves, point, info, reference, toucher, toucher.limits, T_object_from_world
+        )
 
 
 def catalog_experiment(**overrides: Any) -> SimulatedSource:

@@ -16,6 +16,7 @@ from recognition import (
     TouchLimits,
     verify,
 )
+from recognition.evaluation.diagnosis import cause, truth_fit
 from recognition.surfaces.active_touch import LOST_WITHIN_M
 from recognition.surfaces.mesh_model import MeshModel
 from recognition.surfaces.noise_model import huber
@@ -507,3 +508,18 @@ def test_a_pose_added_after_touches_counts_them_as_a_hypothesis_that_made_them(d
     )
     assert loose[0] < made.best.touch_evidence - 0.1
 
+
+def test_the_diagnosis_tells_a_missed_truth_from_data_that_favour_the_answer(database):
+    # curves on the blob searched on the sphere alone: the answer (the sphere) is wrong
+    # and the true pose, scored as a broader search's pose would be, fits far better (the
+    # search missed it); the right answer against itself is a tie
+    model = database["blob"]
+    synthetic = _curves(model, 2500, seed=1, noise=0.005e-3)
+    truth = (model.name, synthetic.T_model_from_data, synthetic.point_in_model)
+    wrong = database.recognize(synthetic.curves, models=["sphere"]).belief
+    fit = truth_fit(database.models, wrong, *truth)
+    assert fit is not None and fit["log_ratio"] > 100 and fit["error_mm"] < 0.1
+    assert cause(fit) == "search"
+    right = database.recognize(synthetic.curves, models=["blob"]).belief
+    fit = truth_fit(database.models, right, *truth)
+    assert fit is not None and abs(fit["log_ratio"]) < 1 and cause(fit) == "tie"
