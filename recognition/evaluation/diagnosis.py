@@ -1,12 +1,12 @@
 """Why a wrong answer is wrong: the search missed the truth, or the data favour the answer.
 
 A benchmark knows the true pose. Scored as the belief scores any pose a broader search
-adds (:meth:`~recognition.surfaces.belief.Belief.with_poses`: refined on the curves, the
-touches counted as it predicted them, then refined on all the contact and its valley
-explored), the truth either explains all the contact better than the answer, and no
-search proposed it, or it does not, and the data themselves favour the answer (a nearly
-symmetric surface, a rival model within the noise). :func:`truth_fit` measures which;
-:func:`cause` names it with a stated threshold.
+adds (:meth:`~recognition.surfaces.belief.Belief.with_poses`: each touch counted as it
+would have predicted it, refined on the curves and the touches before it, then refined on
+all the contact and its valley explored), the truth either explains all the contact
+better than the answer, and no search proposed it, or it does not, and the data
+themselves favour the answer (a nearly symmetric surface, a rival model within the
+noise). :func:`truth_fit` measures which; :func:`cause` names it with a stated threshold.
 """
 
 from __future__ import annotations

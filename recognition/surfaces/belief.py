@@ -334,8 +334,12 @@ class Belief:
         (the chain rule, p(t_1 .. t_k) = prod_i p(t_i | curves, t_<i)). Each pose ends
         refined on the contact before the last touch."""
         n = self.n_curve_points
-        current = list(poses)
-        total: Array = np.zeros(len(current))
+        first: dict[str, int] = {}
+        for name, _, _ in poses:
+            first.setdefault(name, len(first))
+        # in the order _fitted gives them back: grouped by model, in order of appearance
+        current = sorted(poses, key=lambda pose: first[pose[0]])
+        total = np.zeros(len(current))
         for i in range(len(self.windows)):
             before = replace(
                 self,
@@ -351,8 +355,6 @@ class Belief:
                 windows=self.windows[: i + 1],
                 normals=self.normals[: i + 1],
             )
-            if i == 0:  # _fitted groups the poses by model: keep the totals in its order
-                total = np.zeros(len(fitted))
             total += np.array(upto._predicted(fitted, models, upto._whitening(), i))
             current = [(h.model, h.T_model_from_data, 0.0) for h in fitted]
         return [(name, T, float(e)) for (name, T, _), e in zip(current, total, strict=True)]
