@@ -128,8 +128,7 @@ def miss_causes(records: Sequence[Record], after_touches: bool = False) -> dict[
     for r in records:
         if r.confidence is None or r.answered_right(after_touches):
             continue
-        touched = after_touches and r.touches is not None
-        fit = r.touches.get("truth_fit") if touched and r.touches else r.truth_fit
+        fit = r.touches.get("truth_fit") if after_touches and r.touches else r.truth_fit
         counts["wrong"] += 1
         counts[cause(fit) or "unknown"] += 1
     return counts

@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from recognition.evaluation.records import RIGHT_WITHIN_MM
 from recognition.surfaces.belief import Belief
 from recognition.surfaces.mesh_model import MeshModel
 
@@ -59,7 +60,7 @@ def truth_fit(
     }
 
 
-def cause(fit: Mapping[str, Any] | None, radius_mm: float = 1.0) -> str | None:
+def cause(fit: Mapping[str, Any] | None, radius_mm: float = RIGHT_WITHIN_MM) -> str | None:
     """The cause of a wrong answer from its :func:`truth_fit`: ``"search"`` (the truth,
     still within ``radius_mm`` after its refinement, at least ten times likelier than
     the answer: no search proposed it), ``"tie"`` (within ten times either way) or

@@ -15,7 +15,7 @@ from recognition.errors import DegenerateGeometry, InvalidCurveData, InvalidMode
 from recognition.evaluation.diagnosis import truth_fit
 from recognition.evaluation.instances import Instance, InstanceSource, InstanceSpec
 from recognition.evaluation.models import Database
-from recognition.evaluation.records import Record, ReferenceRecord
+from recognition.evaluation.records import RIGHT_WITHIN_MM, Record, ReferenceRecord
 from recognition.evaluation.synthetic_source import SyntheticSource
 from recognition.surfaces.active_touch import verify
 from recognition.surfaces.belief import Belief
@@ -192,7 +192,7 @@ def _truth_fit(
     ):
         return None
     error = _answer_error_mm(belief, true_model, instance.point_in_model)
-    if error is not None and error <= 1.0:
+    if error is not None and error <= RIGHT_WITHIN_MM:
         return None
     return truth_fit(
         database.models, belief, true_model, instance.T_model_from_data, instance.point_in_model

@@ -22,6 +22,7 @@ from typing import Any
 from recognition.errors import InvalidRecords
 
 __all__ = [
+    "RIGHT_WITHIN_MM",
     "TIMING_FIELDS",
     "Record",
     "ReferenceRecord",
@@ -80,6 +81,9 @@ class ReferenceRecord:
             error=payload.get("error"),
         )
 
+
+#: An answer is right when it names the true model and puts p within this of the truth, mm.
+RIGHT_WITHIN_MM = 1.0
 
 _BEFORE_INFO = ("instance", "model", "index", "vertex", "seed")
 #: Keys every record's JSON object has.
@@ -183,7 +187,9 @@ class Record:
     touches: Mapping[str, Any] | None = None
     truth_fit: Mapping[str, Any] | None = None
 
-    def answered_right(self, after_touches: bool = False, radius_mm: float = 1.0) -> bool:
+    def answered_right(
+        self, after_touches: bool = False, radius_mm: float = RIGHT_WITHIN_MM
+    ) -> bool:
         """The belief's answer names the true model and puts p within ``radius_mm`` of
         the truth (after the verification touches, when made and asked for)."""
         if after_touches and self.touches is not None:
