@@ -301,11 +301,14 @@ def local_surface_geometry(
     half_length_m: float = FIT_HALF_LENGTH_M,
     degree: int = FIT_DEGREE,
     point: ArrayLike | None = None,
+    fixed_normal: ArrayLike | None = None,
 ) -> LocalSurfaceGeometry:
     """Normal (4.1) and principal curvatures (4.2)-(4.6) at the curves' common point.
 
     ``point`` ((3,), metres; default ``curves.intersection``) is where the curves are
-    fitted and the geometry evaluated.
+    fitted and the geometry evaluated. ``fixed_normal`` ((3,), outward): the normal to use
+    instead of (4.1)'s, e.g. one estimated over a shorter arc; the curvatures are
+    evaluated at it.
 
     When the curves carry the sensor's normals, those of the points nearest p join the
     tangents in (4.1): N minimises sum_i (N . T_i)^2 + sum_j (1 - (N . n_j)^2), each
@@ -321,7 +324,10 @@ def local_surface_geometry(
     )
     tangents = np.array([f.tangent for f in frames])
     measured = _measured_normals_at(curves, p)
-    if measured is None:
+    if fixed_normal is not None:
+        normal = np.asarray(fixed_normal, dtype=float)
+        normal = normal / np.linalg.norm(normal)
+    elif measured is None:
         normal = surface_normal(tangents)
     else:
         M = tangents.T @ tangents + len(measured) * np.eye(3) - measured.T @ measured

@@ -21,6 +21,8 @@ from recognition.surfaces.local_geometry import (
     principal_curvatures_thesis,
     surface_normal,
 )
+from recognition.surfaces.registration.config import DataGeometryConfig
+from recognition.surfaces.registration.data import data_geometry
 from recognition.synthetic import implicit_data_curves
 
 
@@ -237,3 +239,21 @@ def test_measured_normals_inform_and_orient_the_normal_at_p():
         alone.append(angle_deg(g.normal, true_normal))
     assert max(sensed) < 1.5
     assert np.sqrt(np.mean(np.square(sensed))) < 0.5 * np.sqrt(np.mean(np.square(alone)))
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_the_normal_can_come_from_a_shorter_arc_where_the_data_curve_tightly(seed):
+    # an ellipsoid's rim, radius of curvature down to 6 mm along the curves, sampled as the
+    # thesis's real data (21 points 1.2 mm apart): the whole arc's fits tilt the normal
+    s = cf.ellipsoid(0.03, 0.02, 0.005)
+    synthetic = implicit_data_curves(
+        s, s.sigma(0.3, 1.2), n_points=21, spacing=1.2e-3, rng=np.random.default_rng(seed)
+    )
+    whole = data_geometry(synthetic.curves, DataGeometryConfig())
+    short = data_geometry(synthetic.curves, DataGeometryConfig(normal_max_turn=0.4))
+    exact = synthetic.normal_in_model
+    assert angle_deg(normal_in_model(synthetic, whole), exact) > 4.0
+    assert angle_deg(normal_in_model(synthetic, short), exact) < 0.5
+    # the curvatures still come from the whole arc (the models' maps' scale)
+    assert short.k1 == pytest.approx(whole.k1, rel=0.01)
+    assert short.k2 == pytest.approx(whole.k2, rel=0.05)

@@ -45,6 +45,14 @@ class DataGeometryConfig:
         Largest angle (radians) a data curve may turn over the fit's arc: on tightly
         curved data the arc shrinks to ``fit_max_turn / kappa``, where a polynomial y(x)
         still follows the curve closely. None keeps the arc.
+    normal_max_turn : float or None
+        Where a data curve turns by more than this (radians) over the fit's arc, the
+        normal comes from fits over the arc of this turn (``normal_max_turn / kappa``)
+        and the curvatures from the fits over the whole arc, at that normal. On tightly
+        curved data a fit over the whole arc tilts the normal: over the synthetic fast
+        benchmark's instances at n = 21, d = 1.2 mm, 3 of 100 data normals lay more than
+        10 degrees from the model's (at most 27), 1 with this at 0.4 rad (at most 10.7);
+        the median error stays 0.7 degrees. None: the whole arc for both.
     at_common_point : bool
         Fit at the point where all three curves meet
         (:func:`~recognition.surfaces.registration.data.common_point`); False: at the
@@ -55,6 +63,7 @@ class DataGeometryConfig:
     fit_spacings: float | None = 3.2
     fit_degree: int = 3
     fit_max_turn: float | None = None
+    normal_max_turn: float | None = None
     at_common_point: bool = True
 
 

@@ -81,7 +81,10 @@ def data_geometry(
     paraboloid fits (4.14), and at least three points either side of p when the points
     are sparse (the thesis's real data: 1.2 mm apart). If a data curve turns by more
     than ``fit_max_turn`` over that arc (curvature kappa), the fit is repeated over
-    ``fit_max_turn / kappa``, where a polynomial y(x) still follows the curve closely.
+    ``fit_max_turn / kappa``, where a polynomial y(x) still follows the curve closely; if
+    it turns by more than ``normal_max_turn``, the normal alone comes from fits over
+    ``normal_max_turn / kappa`` (oriented as the whole arc's) and the curvatures from the
+    whole arc's fits at that normal.
     """
     half = _fit_half_length(curves, config)
     point = common_point(curves) if config.at_common_point else None
@@ -91,11 +94,26 @@ def data_geometry(
     if config.fit_max_turn is not None:
         kappa = max(f.curvature for f in geometry.frames)
         if kappa * half > config.fit_max_turn:
+            half = config.fit_max_turn / kappa
             geometry = local_surface_geometry(
+                curves, half_length_m=half, degree=config.fit_degree, point=point
+            )
+    if config.normal_max_turn is not None:
+        kappa = max(f.curvature for f in geometry.frames)
+        if kappa * half > config.normal_max_turn:
+            short = local_surface_geometry(
                 curves,
-                half_length_m=config.fit_max_turn / kappa,
+                half_length_m=config.normal_max_turn / kappa,
                 degree=config.fit_degree,
                 point=point,
+            )
+            normal = short.normal if short.normal @ geometry.normal >= 0 else -short.normal
+            geometry = local_surface_geometry(
+                curves,
+                half_length_m=half,
+                degree=config.fit_degree,
+                point=point,
+                fixed_normal=normal,
             )
     return geometry
 
