@@ -91,31 +91,38 @@ def data_geometry(
     geometry = local_surface_geometry(
         curves, half_length_m=half, degree=config.fit_degree, point=point
     )
-    if config.fit_max_turn is not None:
-        kappa = max(f.curvature for f in geometry.frames)
-        if kappa * half > config.fit_max_turn:
-            half = config.fit_max_turn / kappa
-            geometry = local_surface_geometry(
-                curves, half_length_m=half, degree=config.fit_degree, point=point
-            )
-    if config.normal_max_turn is not None:
-        kappa = max(f.curvature for f in geometry.frames)
-        if kappa * half > config.normal_max_turn:
-            short = local_surface_geometry(
-                curves,
-                half_length_m=config.normal_max_turn / kappa,
-                degree=config.fit_degree,
-                point=point,
-            )
-            normal = short.normal if short.normal @ geometry.normal >= 0 else -short.normal
-            geometry = local_surface_geometry(
-                curves,
-                half_length_m=half,
-                degree=config.fit_degree,
-                point=point,
-                fixed_normal=normal,
-            )
+    shorter = _arc_turning(geometry, half, config.fit_max_turn)
+    if shorter is not None:
+        half = shorter
+        geometry = local_surface_geometry(
+            curves, half_length_m=half, degree=config.fit_degree, point=point
+        )
+    shorter = _arc_turning(geometry, half, config.normal_max_turn)
+    if shorter is not None:
+        short = local_surface_geometry(
+            curves, half_length_m=shorter, degree=config.fit_degree, point=point
+        )
+        normal = short.normal if short.normal @ geometry.normal >= 0 else -short.normal
+        geometry = local_surface_geometry(
+            curves,
+            half_length_m=half,
+            degree=config.fit_degree,
+            point=point,
+            fixed_normal=normal,
+        )
     return geometry
+
+
+def _arc_turning(
+    geometry: LocalSurfaceGeometry, half: float, max_turn: float | None
+) -> float | None:
+    """The half length of arc over which the most curved of ``geometry``'s data curves
+    (fitted over ``half``) turns by ``max_turn`` radians, when shorter than ``half``;
+    None: it is not, or no limit."""
+    if max_turn is None:
+        return None
+    kappa = max(f.curvature for f in geometry.frames)
+    return max_turn / kappa if kappa * half > max_turn else None
 
 
 def _fit_half_length(curves: DataCurves, config: DataGeometryConfig) -> float:
