@@ -177,7 +177,8 @@ class FastConfig:
         both data and model disagree more where the curvature is high.
     geometry : DataGeometryConfig
         The data's local geometry at p, at the scale of the models' paraboloid fits
-        (4.14).
+        (4.14); the normal from the arc over which a data curve turns by at most 0.4 rad
+        (:attr:`DataGeometryConfig.normal_max_turn`).
     search : FastSearchConfig
         The first pass.
     fallbacks : tuple of FastSearchConfig
@@ -239,7 +240,9 @@ class FastConfig:
 
     delta: float = 30.0
     relative_delta: float = 0.3
-    geometry: DataGeometryConfig = field(default_factory=DataGeometryConfig)
+    geometry: DataGeometryConfig = field(
+        default_factory=lambda: DataGeometryConfig(normal_max_turn=0.4)
+    )
     search: FastSearchConfig = field(default_factory=FastSearchConfig)
     fallbacks: tuple[FastSearchConfig, ...] = (ALIGNED_SEARCH, THOROUGH_SEARCH)
     accept_sigmas: float = 4.0
