@@ -367,14 +367,18 @@ class Belief:
     ) -> Belief:
         """This belief with ``hypotheses`` (model, T_model_from_data, touch evidence)
         refined on all the points, the valleys of the most probable explored
-        (:meth:`_explored`), near-duplicates merged, scored and normalised;
-        ``whitening``: :meth:`_whitening`, when already computed."""
+        (:meth:`_explored`; a new pose found there counts the touches as it would have
+        predicted each in turn, :meth:`_in_turn`), near-duplicates merged, scored and
+        normalised; ``whitening``: :meth:`_whitening`, when already computed."""
         config = self.config
         whitening = self._whitening() if whitening is None else whitening
         found = self._fitted(hypotheses, models, whitening)
         if not found:
             return self
-        found += self._fitted(self._explored(found), models, whitening)
+        starts = self._explored(found)
+        if starts and len(self.windows):
+            starts = self._in_turn(self._new_minima(starts, found, models, whitening), models)
+        found += self._fitted(starts, models, whitening)
         found = _merged(found, self.point)
         logs = np.array([h.log_likelihood for h in found])
         # "none of these": as likely as a fit whose curves' whitened residuals sit at the
@@ -481,8 +485,9 @@ class Belief:
         makes several minima along it, far beyond what the Laplace covariance sees. Each
         of the ``explore_hypotheses`` most likely (within ``explore_log_gap`` of the best)
         is moved along its two least determined motions (the rotation scaled by the
-        data's reach) by each of ``explore_steps_m`` either way; each start keeps the
-        touch evidence of the hypothesis it came from (the same valley)."""
+        data's reach) by each of ``explore_steps_m`` either way. The starts carry no
+        touch evidence: a pose along a valley can miss a touch its neighbour met
+        (:meth:`_rescored` counts the touches for each new pose it comes to)."""
         config = self.config
         best = max(h.log_likelihood for h in found)
         top = sorted(found, key=lambda h: -h.log_likelihood)[: config.explore_hypotheses]
@@ -495,10 +500,32 @@ class Belief:
             for _, direction in self.loose_motions(h):
                 for step in config.explore_steps_m:
                     starts += [
-                        (h.model, h.moved(step * direction), h.touch_evidence),
-                        (h.model, h.moved(-step * direction), h.touch_evidence),
+                        (h.model, h.moved(step * direction), 0.0),
+                        (h.model, h.moved(-step * direction), 0.0),
                     ]
         return starts
+
+    def _new_minima(
+        self,
+        starts: Sequence[tuple[str, Array, float]],
+        found: Sequence[Hypothesis],
+        models: Mapping[str, MeshModel],
+        whitening: Array,
+    ) -> list[tuple[str, Array, float]]:
+        """``starts`` (model, T_model_from_data, _) refined on all the points; those
+        that came to a pose of ``found`` (:func:`distinct_poses`) or of a start that fits
+        the curves (and the misses) better are left out."""
+        fitted = self._fitted([(n, T, 0.0) for n, T, _ in starts], models, whitening)
+        out: list[tuple[str, Array, float]] = []
+        for name in dict.fromkeys(h.model for h in fitted):
+            known = [h for h in found if h.model == name]
+            mine = [h for h in fitted if h.model == name]
+            both = known + mine
+            T = np.array([h.T_model_from_data for h in both])
+            rank = np.r_[np.full(len(known), -np.inf), [-h.log_likelihood for h in mine]]
+            kept = distinct_poses(T[:, :3, :3], T[:, :3, 3], rank, self.point, len(both))
+            out += [(name, both[k].T_model_from_data, 0.0) for k in kept if k >= len(known)]
+        return out
 
     def loose_motions(self, h: Hypothesis) -> list[tuple[float, Array]]:
         """The two least determined motions of ``h``'s pose, least determined first: the

@@ -18,6 +18,7 @@ from recognition import (
 )
 from recognition.evaluation.diagnosis import cause, truth_fit
 from recognition.surfaces.active_touch import LOST_WITHIN_M
+from recognition.surfaces.belief import Belief
 from recognition.surfaces.mesh_model import MeshModel
 from recognition.surfaces.noise_model import huber
 from recognition.surfaces.registration import ALIGNED_SEARCH, FastConfig, data_geometry
@@ -480,12 +481,9 @@ def test_bad_arguments_are_refused_with_typed_errors(database):
         NoiseModel(model_mismatch_m=-1.0)
 
 
-def test_a_pose_added_after_touches_counts_them_as_a_hypothesis_that_made_them(database):
-    # short noisy curves leave the blob's pose loose; two touches pin it. A pose added
-    # after them (a broader search's) predicts each touch in turn, the second at the pose
-    # the first pinned: exactly as a hypothesis that was there when they were made (no
-    # valleys explored, so that one pose is followed), and more than the pose the curves
-    # alone leave loose predicts them
+def _loose_blob_and_two_touches(database):
+    """Short noisy curves on the blob, which leave its pose loose: their belief and two
+    touches on the blob 12 and 20 mm from p (data frame)."""
     model = database["blob"]
     synthetic = _curves(model, 2500, seed=1, noise=0.05e-3, n_points=11, spacing_m=1.2e-3)
     found = database.recognize(synthetic.curves, models=["blob"]).belief
@@ -495,6 +493,16 @@ def test_a_pose_added_after_touches_counts_them_as_a_hypothesis_that_made_them(d
     above = 1e3 * (model.vertices[:, 2] < p[2])
     v = [int(np.argmin(np.abs(distance - d) + above)) for d in (12e-3, 20e-3)]
     touched = model.vertices[v] @ data_from_model[:3, :3].T + data_from_model[:3, 3]
+    return found, touched
+
+
+def test_a_pose_added_after_touches_counts_them_as_a_hypothesis_that_made_them(database):
+    # short noisy curves leave the blob's pose loose; two touches pin it. A pose added
+    # after them (a broader search's) predicts each touch in turn, the second at the pose
+    # the first pinned: exactly as a hypothesis that was there when they were made (no
+    # valleys explored, so that one pose is followed), and more than the pose the curves
+    # alone leave loose predicts them
+    found, touched = _loose_blob_and_two_touches(database)
     start = [("blob", found.best.T_model_from_data)]
     config = replace(found.config, explore_hypotheses=0)
     before = replace(found, hypotheses=(), config=config).with_poses(database.models, start)
@@ -523,3 +531,34 @@ def test_the_diagnosis_tells_a_missed_truth_from_data_that_favour_the_answer(dat
     right = database.recognize(synthetic.curves, models=["blob"]).belief
     fit = truth_fit(database.models, right, *truth)
     assert fit is not None and abs(fit["log_ratio"]) < 1 and cause(fit) == "tie"
+
+
+def test_a_pose_found_along_a_valley_after_touches_counts_them_as_it_predicted_them(
+    database, monkeypatch
+):
+    # a pose that the valley exploration finds after touches counts each touch as it
+    # would have predicted it in turn (as a broader search's pose does), not as the
+    # hypothesis whose valley it lies along predicted it: short noisy curves leave the
+    # blob's pose loose, and a pose started 7 mm along that valley ends 6 mm away, 5 mm
+    # off the second touch, which the pose the touches pinned meets
+    found, touched = _loose_blob_and_two_touches(database)
+    # no valleys explored at the first touch, every pose kept: the one start below is
+    # all the exploration there is
+    found = replace(found, config=replace(found.config, explore_hypotheses=0, min_posterior=0))
+    once = database.update(found, touched[:1])
+    _, second = once.loose_motions(once.best)[1]
+    start = once.best.moved(-7e-3 * second)
+    monkeypatch.setattr(Belief, "_explored", lambda belief, found: [("blob", start, 0.0)])
+    after = database.update(once, touched[1:])
+    # the same steps by hand: refined on all the contact, each touch predicted in turn
+    fresh = replace(after, hypotheses=())
+    whitening = fresh._whitening()
+    minimum = fresh._fitted([("blob", start, 0.0)], database.models, whitening)[0]
+    ((name, T, evidence),) = fresh._in_turn(
+        [("blob", minimum.T_model_from_data, 0.0)], database.models
+    )
+    expected = fresh._fitted([(name, T, evidence)], database.models, whitening)[0]
+    assert np.linalg.norm(expected.location - after.best.location) > 1e-3
+    (valley,) = [h for h in after.hypotheses if np.allclose(h.location, expected.location)]
+    assert valley.touch_evidence == pytest.approx(evidence, abs=1e-9)
+    assert valley.touch_evidence < after.best.touch_evidence - 10.0
