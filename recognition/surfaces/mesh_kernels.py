@@ -27,6 +27,9 @@ __all__ = ["build_cells", "closest_point", "closest_points", "face_bounds", "fir
 
 #: How far outside a triangle, in barycentric coordinates, a ray still hits it.
 RAY_SLACK = 1e-10
+#: Floor of a squared length that divides (m^2): a corner's coinciding with another makes
+#: the numerator zero too.
+TINY = 1e-300
 
 Array = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -118,6 +121,54 @@ def build_cells(
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
+def _on_segment(
+    px: float,
+    py: float,
+    pz: float,
+    ax: float,
+    ay: float,
+    az: float,
+    bx: float,
+    by: float,
+    bz: float,
+) -> tuple[float, float, float, float]:  # pragma: no cover - compiled
+    """The point of segment ab closest to p and its squared distance from p."""
+    abx, aby, abz = bx - ax, by - ay, bz - az
+    t = (abx * (px - ax) + aby * (py - ay) + abz * (pz - az)) / max(
+        abx * abx + aby * aby + abz * abz, TINY
+    )
+    t = min(max(t, 0.0), 1.0)
+    x, y, z = ax + abx * t, ay + aby * t, az + abz * t
+    return x, y, z, (px - x) ** 2 + (py - y) ** 2 + (pz - z) ** 2
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _on_edges(
+    px: float,
+    py: float,
+    pz: float,
+    ax: float,
+    ay: float,
+    az: float,
+    bx: float,
+    by: float,
+    bz: float,
+    cx: float,
+    cy: float,
+    cz: float,
+) -> tuple[float, float, float]:  # pragma: no cover - compiled
+    """The point of the edges of triangle abc closest to p."""
+    best = _on_segment(px, py, pz, ax, ay, az, bx, by, bz)
+    other = _on_segment(px, py, pz, ax, ay, az, cx, cy, cz)
+    if other[3] < best[3]:
+        best = other
+    other = _on_segment(px, py, pz, bx, by, bz, cx, cy, cz)
+    if other[3] < best[3]:
+        best = other
+    return best[0], best[1], best[2]
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
 def _on_triangle(
     px: float,
     py: float,
@@ -133,7 +184,10 @@ def _on_triangle(
     cz: float,
 ) -> tuple[float, float, float]:  # pragma: no cover - compiled
     """The point of triangle abc closest to p (Ericson 5.1.5: Voronoi regions of the
-    vertices, then of the edges, then the inside)."""
+    vertices, then of the edges, then the inside). A triangle without area (corners that
+    coincide or lie on one line) is its edges: a division by an edge's squared length
+    has a zero numerator when that length is zero, and where rounding leads such a
+    triangle to its inside, the nearest of its edges is taken."""
     abx, aby, abz = bx - ax, by - ay, bz - az
     acx, acy, acz = cx - ax, cy - ay, cz - az
     apx, apy, apz = px - ax, py - ay, pz - az
@@ -148,7 +202,7 @@ def _on_triangle(
         return bx, by, bz
     vc = d1 * d4 - d3 * d2
     if vc <= 0.0 and d1 >= 0.0 and d3 <= 0.0:
-        t = d1 / (d1 - d3)
+        t = d1 / max(d1 - d3, TINY)  # d1 - d3 = |ab|^2
         return ax + abx * t, ay + aby * t, az + abz * t
     cpx, cpy, cpz = px - cx, py - cy, pz - cz
     d5 = abx * cpx + aby * cpy + abz * cpz
@@ -157,14 +211,16 @@ def _on_triangle(
         return cx, cy, cz
     vb = d5 * d2 - d1 * d6
     if vb <= 0.0 and d2 >= 0.0 and d6 <= 0.0:
-        t = d2 / (d2 - d6)
+        t = d2 / max(d2 - d6, TINY)  # |ac|^2
         return ax + acx * t, ay + acy * t, az + acz * t
     va = d3 * d6 - d5 * d4
     if va <= 0.0 and d4 - d3 >= 0.0 and d5 - d6 >= 0.0:
-        t = (d4 - d3) / ((d4 - d3) + (d5 - d6))
+        t = (d4 - d3) / max((d4 - d3) + (d5 - d6), TINY)  # |bc|^2
         return bx + (cx - bx) * t, by + (cy - by) * t, bz + (cz - bz) * t
-    denom = 1.0 / (va + vb + vc)
-    v, w = vb * denom, vc * denom
+    area = va + vb + vc  # |ab x ac|^2
+    if not area > 0.0:  # no area left to rounding: the nearest of its edges
+        return _on_edges(px, py, pz, ax, ay, az, bx, by, bz, cx, cy, cz)
+    v, w = vb / area, vc / area
     return ax + abx * v + acx * w, ay + aby * v + acy * w, az + abz * v + acz * w
 
 

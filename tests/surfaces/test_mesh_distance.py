@@ -98,6 +98,33 @@ def test_a_single_triangle_and_a_degenerate_one():
     np.testing.assert_allclose(d, reference(flat, np.array([[0, 1, 2], [0, 1, 3]]), points))
 
 
+def test_triangles_with_coincident_corners_are_their_segments_and_points():
+    # a scan's welded seam can leave a face with two corners (or all three) at one place:
+    # it is the segment (or the point) between them, and never a division by zero
+    points = np.random.default_rng(3).normal(scale=0.05, size=(500, 3))
+    vertices = np.array(
+        [
+            [0.0, 0, 0],
+            [0.0, 0, 0],
+            [0.01, 0.02, 0],
+            [0.03, 0, 0.01],
+            [0.03, 0, 0.01],
+            [0.03, 0, 0.01],
+        ]
+    )
+    faces = np.array([[0, 1, 2], [1, 2, 0], [2, 0, 1], [3, 4, 5]])
+    d, q, f = MeshDistance(vertices, faces).closest(points)
+    segment = vertices[2] - vertices[0]
+    t = np.clip((points - vertices[0]) @ segment / (segment @ segment), 0.0, 1.0)
+    on_segment = vertices[0] + t[:, None] * segment
+    expected = np.minimum(
+        np.linalg.norm(points - on_segment, axis=1), np.linalg.norm(points - vertices[3], axis=1)
+    )
+    np.testing.assert_allclose(d, expected, rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(np.linalg.norm(points - q, axis=1), d, rtol=1e-12, atol=1e-15)
+    assert set(np.unique(f)) <= {0, 1, 2, 3}
+
+
 def test_points_that_are_not_finite_get_no_answer():
     mesh = blob(subdivisions=3)
     d, q, f = MeshDistance(mesh.vertices, mesh.faces).closest(
