@@ -27,9 +27,12 @@ __all__ = ["build_cells", "closest_point", "closest_points", "face_bounds", "fir
 
 #: How far outside a triangle, in barycentric coordinates, a ray still hits it.
 RAY_SLACK = 1e-10
-#: Floor of a squared length that divides (m^2): a corner's coinciding with another makes
-#: the numerator zero too.
+#: Floor of a segment's squared length where it divides (m^2): a segment of no length is
+#: its one point.
 TINY = 1e-300
+#: A triangle whose sine of the angle at a corner is below sqrt(FLAT) has no area to
+#: speak of (closest points: its edges).
+FLAT = 1e-20
 
 Array = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -122,50 +125,16 @@ def build_cells(
 
 @numba.njit(cache=True, nogil=True, inline="always")
 def _on_segment(
-    px: float,
-    py: float,
-    pz: float,
-    ax: float,
-    ay: float,
-    az: float,
-    bx: float,
-    by: float,
-    bz: float,
+    p: tuple[float, float, float], a: tuple[float, float, float], b: tuple[float, float, float]
 ) -> tuple[float, float, float, float]:  # pragma: no cover - compiled
     """The point of segment ab closest to p and its squared distance from p."""
-    abx, aby, abz = bx - ax, by - ay, bz - az
-    t = (abx * (px - ax) + aby * (py - ay) + abz * (pz - az)) / max(
+    abx, aby, abz = b[0] - a[0], b[1] - a[1], b[2] - a[2]
+    t = (abx * (p[0] - a[0]) + aby * (p[1] - a[1]) + abz * (p[2] - a[2])) / max(
         abx * abx + aby * aby + abz * abz, TINY
     )
     t = min(max(t, 0.0), 1.0)
-    x, y, z = ax + abx * t, ay + aby * t, az + abz * t
-    return x, y, z, (px - x) ** 2 + (py - y) ** 2 + (pz - z) ** 2
-
-
-@numba.njit(cache=True, nogil=True, inline="always")
-def _on_edges(
-    px: float,
-    py: float,
-    pz: float,
-    ax: float,
-    ay: float,
-    az: float,
-    bx: float,
-    by: float,
-    bz: float,
-    cx: float,
-    cy: float,
-    cz: float,
-) -> tuple[float, float, float]:  # pragma: no cover - compiled
-    """The point of the edges of triangle abc closest to p."""
-    best = _on_segment(px, py, pz, ax, ay, az, bx, by, bz)
-    other = _on_segment(px, py, pz, ax, ay, az, cx, cy, cz)
-    if other[3] < best[3]:
-        best = other
-    other = _on_segment(px, py, pz, bx, by, bz, cx, cy, cz)
-    if other[3] < best[3]:
-        best = other
-    return best[0], best[1], best[2]
+    x, y, z = a[0] + abx * t, a[1] + aby * t, a[2] + abz * t
+    return x, y, z, (p[0] - x) ** 2 + (p[1] - y) ** 2 + (p[2] - z) ** 2
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
@@ -184,12 +153,19 @@ def _on_triangle(
     cz: float,
 ) -> tuple[float, float, float]:  # pragma: no cover - compiled
     """The point of triangle abc closest to p (Ericson 5.1.5: Voronoi regions of the
-    vertices, then of the edges, then the inside). A triangle without area (corners that
-    coincide or lie on one line) is its edges: a division by an edge's squared length
-    has a zero numerator when that length is zero, and where rounding leads such a
-    triangle to its inside, the nearest of its edges is taken."""
+    vertices, then of the edges, then the inside). A triangle without area to speak of
+    (corners that coincide or lie on one line, up to ``FLAT``) is its edges."""
     abx, aby, abz = bx - ax, by - ay, bz - az
     acx, acy, acz = cx - ax, cy - ay, cz - az
+    nx, ny, nz = aby * acz - abz * acy, abz * acx - abx * acz, abx * acy - aby * acx
+    area = nx * nx + ny * ny + nz * nz  # |ab x ac|^2
+    if not area > FLAT * (abx * abx + aby * aby + abz * abz) * (acx * acx + acy * acy + acz * acz):
+        p, a, b, c = (px, py, pz), (ax, ay, az), (bx, by, bz), (cx, cy, cz)
+        best = _on_segment(p, a, b)
+        for other in (_on_segment(p, a, c), _on_segment(p, b, c)):
+            if other[3] < best[3]:
+                best = other
+        return best[0], best[1], best[2]
     apx, apy, apz = px - ax, py - ay, pz - az
     d1 = abx * apx + aby * apy + abz * apz
     d2 = acx * apx + acy * apy + acz * apz
@@ -202,7 +178,7 @@ def _on_triangle(
         return bx, by, bz
     vc = d1 * d4 - d3 * d2
     if vc <= 0.0 and d1 >= 0.0 and d3 <= 0.0:
-        t = d1 / max(d1 - d3, TINY)  # d1 - d3 = |ab|^2
+        t = d1 / (d1 - d3)
         return ax + abx * t, ay + aby * t, az + abz * t
     cpx, cpy, cpz = px - cx, py - cy, pz - cz
     d5 = abx * cpx + aby * cpy + abz * cpz
@@ -211,16 +187,15 @@ def _on_triangle(
         return cx, cy, cz
     vb = d5 * d2 - d1 * d6
     if vb <= 0.0 and d2 >= 0.0 and d6 <= 0.0:
-        t = d2 / max(d2 - d6, TINY)  # |ac|^2
+        t = d2 / (d2 - d6)
         return ax + acx * t, ay + acy * t, az + acz * t
     va = d3 * d6 - d5 * d4
     if va <= 0.0 and d4 - d3 >= 0.0 and d5 - d6 >= 0.0:
-        t = (d4 - d3) / max((d4 - d3) + (d5 - d6), TINY)  # |bc|^2
+        t = (d4 - d3) / ((d4 - d3) + (d5 - d6))
         return bx + (cx - bx) * t, by + (cy - by) * t, bz + (cz - bz) * t
-    area = va + vb + vc  # |ab x ac|^2
-    if not area > 0.0:  # no area left to rounding: the nearest of its edges
-        return _on_edges(px, py, pz, ax, ay, az, bx, by, bz, cx, cy, cz)
-    v, w = vb / area, vc / area
+    total = va + vb + vc  # |ab x ac|^2, but for rounding
+    denom = 1.0 / (total if total > 0.0 else area)
+    v, w = vb * denom, vc * denom
     return ax + abx * v + acx * w, ay + aby * v + acy * w, az + abz * v + acz * w
 
 

@@ -100,29 +100,20 @@ def test_a_single_triangle_and_a_degenerate_one():
 
 def test_triangles_with_coincident_corners_are_their_segments_and_points():
     # a scan's welded seam can leave a face with two corners (or all three) at one place:
-    # it is the segment (or the point) between them, and never a division by zero
+    # it is the segment (or the point) between them, whichever corner comes first, and
+    # never a division by zero
     points = np.random.default_rng(3).normal(scale=0.05, size=(500, 3))
-    vertices = np.array(
-        [
-            [0.0, 0, 0],
-            [0.0, 0, 0],
-            [0.01, 0.02, 0],
-            [0.03, 0, 0.01],
-            [0.03, 0, 0.01],
-            [0.03, 0, 0.01],
-        ]
-    )
-    faces = np.array([[0, 1, 2], [1, 2, 0], [2, 0, 1], [3, 4, 5]])
-    d, q, f = MeshDistance(vertices, faces).closest(points)
-    segment = vertices[2] - vertices[0]
-    t = np.clip((points - vertices[0]) @ segment / (segment @ segment), 0.0, 1.0)
-    on_segment = vertices[0] + t[:, None] * segment
-    expected = np.minimum(
-        np.linalg.norm(points - on_segment, axis=1), np.linalg.norm(points - vertices[3], axis=1)
-    )
-    np.testing.assert_allclose(d, expected, rtol=1e-12, atol=1e-15)
-    np.testing.assert_allclose(np.linalg.norm(points - q, axis=1), d, rtol=1e-12, atol=1e-15)
-    assert set(np.unique(f)) <= {0, 1, 2, 3}
+    a, c, d = np.array([0.0, 0, 0]), np.array([0.01, 0.02, 0]), np.array([0.03, 0, 0.01])
+    t = np.clip((points - a) @ (c - a) / ((c - a) @ (c - a)), 0.0, 1.0)
+    to_segment = np.linalg.norm(points - (a + t[:, None] * (c - a)), axis=1)
+    far = [[10.0, 0, 0], [10.0, 0.01, 0], [10.0, 0, 0.01]]  # a face that is never nearest
+    for corners in ([a, a, c], [a, c, a], [c, a, a], [a, c, c], [d, d, d]):
+        expected = to_segment if corners[0] is not d else np.linalg.norm(points - d, axis=1)
+        mesh = MeshDistance(np.vstack([corners, far]), [[0, 1, 2], [3, 4, 5]])
+        distance, closest, face = mesh.closest(points)
+        np.testing.assert_allclose(distance, expected, rtol=1e-12, atol=1e-15)
+        np.testing.assert_allclose(np.linalg.norm(points - closest, axis=1), distance, rtol=1e-12)
+        assert np.all(face == 0)
 
 
 def test_points_that_are_not_finite_get_no_answer():
