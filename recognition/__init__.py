@@ -22,9 +22,10 @@ from recognition.errors import (
     RecognitionError,
 )
 from recognition.surfaces.active_touch import Contact, NoReading, TouchStep, Verification, verify
-from recognition.surfaces.belief import Belief, BeliefConfig, Hypothesis
+from recognition.surfaces.belief import Belief, BeliefConfig
 from recognition.surfaces.data_curves import DataCurves
 from recognition.surfaces.database import DATABASE_FORMAT, ModelDatabase
+from recognition.surfaces.hypothesis import Hypothesis
 from recognition.surfaces.mesh_model import MeshModelConfig
 from recognition.surfaces.noise_model import NoiseModel
 from recognition.surfaces.registration import (

@@ -13,7 +13,8 @@ from recognition.surfaces.local_geometry import LocalSurfaceGeometry
 from recognition.surfaces.registration.result import Registration
 
 if TYPE_CHECKING:
-    from recognition.surfaces.belief import Belief, Hypothesis
+    from recognition.surfaces.belief import Belief
+    from recognition.surfaces.hypothesis import Hypothesis
 
 __all__ = ["Recognition", "rank"]
 
