@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+import igl
 import numpy as np
 import pytest
 
 from recognition import ModelDatabase
 from recognition.errors import RecognitionError
 from recognition.rigid import rotation_angle
+from recognition.surfaces.mesh_files import read_mesh
 from recognition.surfaces.mesh_model import MeshModel
 from recognition.synthetic import mesh_data_curves
 from tactile_sim.objects import user_meshes as um
@@ -96,3 +98,20 @@ def test_a_two_million_face_mesh_is_simplified_with_its_loss_and_recognised() ->
     synthetic = _instances(model, 1, seed=0)[0]
     result = ModelDatabase({"dense": model}).recognize(synthetic.curves)
     assert result.name == "dense" and result.best.error_m < 0.05e-3
+
+
+def test_a_glb_part_whose_faces_have_coinciding_corners_is_a_model(tmp_path) -> None:
+    # GLB stores float32 positions: the exported part_1 comes back with ten faces whose
+    # corners coincide (distinct vertices at one place); they are kept, and its
+    # symmetries and exact closest points are found as on any other mesh
+    path = tmp_path / "part_1.glb"
+    um.cad_part(1).apply_scale(1e3).export(path)
+    model = MeshModel("part_1", read_mesh(path, "mm"))
+    assert np.count_nonzero(model.mesh.area_faces <= 1e-18) > 0
+    assert isinstance(model.symmetries, np.ndarray)
+    rng = np.random.default_rng(0)
+    points = model.vertices[rng.integers(len(model.vertices), size=400)]
+    points = points + rng.normal(scale=1e-3, size=points.shape)
+    d, _, _ = model.distance.closest(points)
+    d2, _, _ = igl.point_mesh_squared_distance(points, model.mesh.vertices, model.mesh.faces)
+    np.testing.assert_allclose(d, np.sqrt(d2), rtol=1e-9, atol=1e-12)
