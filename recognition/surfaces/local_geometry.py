@@ -95,6 +95,12 @@ class LocalSurfaceGeometry:
     normal_curvatures: Array
     oriented: bool
 
+    def with_normal(self, normal: ArrayLike) -> LocalSurfaceGeometry:
+        """The principal curvatures of the same curve fits about another ``normal`` (e.g.
+        one estimated over a shorter arc); its sign is kept."""
+        unit = np.asarray(normal, dtype=float)
+        return _at_normal(self.point, unit / np.linalg.norm(unit), self.frames, self.oriented)
+
     def flipped(self) -> LocalSurfaceGeometry:
         """The same geometry seen with the opposite normal: (k1, k2) -> (-k2, -k1)."""
         return LocalSurfaceGeometry(
@@ -301,14 +307,11 @@ def local_surface_geometry(
     half_length_m: float = FIT_HALF_LENGTH_M,
     degree: int = FIT_DEGREE,
     point: ArrayLike | None = None,
-    fixed_normal: ArrayLike | None = None,
 ) -> LocalSurfaceGeometry:
     """Normal (4.1) and principal curvatures (4.2)-(4.6) at the curves' common point.
 
     ``point`` ((3,), metres; default ``curves.intersection``) is where the curves are
-    fitted and the geometry evaluated. ``fixed_normal`` ((3,), outward): the normal to use
-    instead of (4.1)'s, e.g. one estimated over a shorter arc; the curvatures are
-    evaluated at it.
+    fitted and the geometry evaluated.
 
     When the curves carry the sensor's normals, those of the points nearest p join the
     tangents in (4.1): N minimises sum_i (N . T_i)^2 + sum_j (1 - (N . n_j)^2), each
@@ -324,10 +327,7 @@ def local_surface_geometry(
     )
     tangents = np.array([f.tangent for f in frames])
     measured = _measured_normals_at(curves, p)
-    if fixed_normal is not None:
-        normal = np.asarray(fixed_normal, dtype=float)
-        normal = normal / np.linalg.norm(normal)
-    elif measured is None:
+    if measured is None:
         normal = surface_normal(tangents)
     else:
         M = tangents.T @ tangents + len(measured) * np.eye(3) - measured.T @ measured
@@ -337,9 +337,18 @@ def local_surface_geometry(
     oriented = approach is not None or measured is not None
     if approach is not None and measured is None:
         normal = -normal if normal @ approach > 0 else normal
+    if not oriented and np.mean([normal_curvature(f, normal) for f in frames]) < 0:
+        normal = -normal
+    return _at_normal(p, normal, frames, oriented)
+
+
+def _at_normal(
+    p: Array, normal: Array, frames: tuple[CurveFrame, ...], oriented: bool
+) -> LocalSurfaceGeometry:
+    """The principal curvatures (4.2)-(4.6) at p of the curves' ``frames`` about the unit
+    ``normal``."""
+    tangents = np.array([f.tangent for f in frames])
     kn = np.array([normal_curvature(f, normal) for f in frames])
-    if not oriented and kn.mean() < 0:
-        normal, kn = -normal, -kn
     # tangent-plane basis: e1 along the first curve's projected tangent
     e1 = tangents[0] - normal * (tangents[0] @ normal)
     e1 /= np.linalg.norm(e1)

@@ -84,7 +84,7 @@ def data_geometry(
     ``fit_max_turn / kappa``, where a polynomial y(x) still follows the curve closely; if
     it turns by more than ``normal_max_turn``, the normal alone comes from fits over
     ``normal_max_turn / kappa`` (oriented as the whole arc's) and the curvatures from the
-    whole arc's fits at that normal.
+    whole arc's fits at that normal (:meth:`LocalSurfaceGeometry.with_normal`).
     """
     half = _fit_half_length(curves, config)
     point = common_point(curves) if config.at_common_point else None
@@ -103,13 +103,7 @@ def data_geometry(
             curves, half_length_m=shorter, degree=config.fit_degree, point=point
         )
         normal = short.normal if short.normal @ geometry.normal >= 0 else -short.normal
-        geometry = local_surface_geometry(
-            curves,
-            half_length_m=half,
-            degree=config.fit_degree,
-            point=point,
-            fixed_normal=normal,
-        )
+        geometry = geometry.with_normal(normal)
     return geometry
 
 
