@@ -31,7 +31,10 @@ pose's uncertainty (:mod:`recognition.surfaces.touch_evidence`; :attr:`Hypothesi
 touch_evidence`): its contact point against the uniform spread along the approach that
 "none of these" predicts (:attr:`Belief.windows`), its sensed normal (:attr:`Belief.
 normals`) against a uniform hemisphere. When no hypothesis predicted the touches, "none
-of these" grows.
+of these" grows. A hypothesis whose refinement then moves p farther than its uncertainty
+explains (:attr:`BeliefConfig.drift_sds`) has come to another place, for which the
+predictions it made from where it was do not speak: its touches count again as it would
+have predicted each in turn there.
 
 Each hypothesis also carries the uncertainty of its pose (Laplace: the inverse of
 J^T Sigma^-1 J, J the point-to-plane Jacobian of the residuals, with a weak prior) and so
@@ -233,6 +236,7 @@ class Belief:
             ],
             models,
             whitening,
+            [self.config.drift_reach_m(h.location_covariance) for h in self.hypotheses],
         )
 
     def with_poses(
@@ -257,11 +261,7 @@ class Belief:
         (the chain rule, p(t_1 .. t_k) = prod_i p(t_i | curves, t_<i)). Each pose ends
         refined on the contact before the last touch."""
         n = self.n_curve_points
-        first: dict[str, int] = {}
-        for name, _, _ in poses:
-            first.setdefault(name, len(first))
-        # in the order _fitted gives them back: grouped by model, in order of appearance
-        current = sorted(poses, key=lambda pose: first[pose[0]])
+        current = [poses[k] for k in _fitted_order([name for name, _, _ in poses])]
         total = np.zeros(len(current))
         for i in range(len(self.windows)):
             before = replace(
@@ -287,9 +287,12 @@ class Belief:
         hypotheses: Sequence[tuple[str, Array, float]],
         models: Mapping[str, MeshModel],
         whitening: Array | None = None,
+        reach: Sequence[float] | None = None,
     ) -> Belief:
         """This belief with ``hypotheses`` (model, T_model_from_data, touch evidence)
-        refined on all the points, the valleys of the most probable explored
+        refined on all the points (one that moves p farther than its ``reach``, metres,
+        counts its touches again where it came to, :meth:`_recounted`), the valleys of
+        the most probable explored
         (:meth:`_explored`; a new pose found there counts the touches as it would have
         predicted each in turn, :meth:`_in_turn`), near-duplicates merged, scored and
         normalised; ``whitening``: :meth:`_whitening`, when already computed."""
@@ -298,6 +301,8 @@ class Belief:
         found = self._fitted(hypotheses, models, whitening)
         if not found:
             return self
+        if reach is not None and len(self.windows):
+            found = self._recounted(hypotheses, found, reach, models, whitening)
         starts = self._explored(found)
         if starts and len(self.windows):
             starts = self._in_turn(self._new_minima(starts, found, models, whitening), models)
@@ -321,6 +326,29 @@ class Belief:
             if weights[i] >= config.min_posterior or i == order[0]
         )
         return replace(self, hypotheses=kept, unexplained=unexplained)
+
+    def _recounted(
+        self,
+        hypotheses: Sequence[tuple[str, Array, float]],
+        found: list[Hypothesis],
+        reach: Sequence[float],
+        models: Mapping[str, MeshModel],
+        whitening: Array,
+    ) -> list[Hypothesis]:
+        """``found``, ``hypotheses`` refined (:meth:`_fitted`), with each that moved p
+        farther than its ``reach`` (metres) counted again: it has come to another place,
+        for which the touches it predicted from where it was do not speak, and there
+        its touches count as it would have predicted each in turn (:meth:`_in_turn`)."""
+        far = []
+        for h, k in zip(found, _fitted_order([name for name, _, _ in hypotheses]), strict=True):
+            T = hypotheses[k][1]
+            if np.linalg.norm(h.location - (T[:3, :3] @ self.point + T[:3, 3])) > reach[k]:
+                far.append(h)
+        if not far:
+            return found
+        again = self._in_turn([(h.model, h.T_model_from_data, 0.0) for h in far], models)
+        kept = [h for h in found if all(h is not f for f in far)]
+        return kept + self._fitted(again, models, whitening)
 
     def _whitening(self) -> Array:
         """The inverse of the lower Cholesky factor of Sigma over :attr:`points`."""
@@ -516,6 +544,15 @@ class Belief:
             )
             for h in hypotheses
         ]
+
+
+def _fitted_order(names: Sequence[str]) -> list[int]:
+    """The order in which :meth:`Belief._fitted` gives back poses of these models:
+    grouped by model, models in order of first appearance, each's in its order."""
+    first: dict[str, int] = {}
+    for name in names:
+        first.setdefault(name, len(first))
+    return sorted(range(len(names)), key=lambda k: first[names[k]])
 
 
 def _merged(found: Sequence[Hypothesis], point: Array) -> list[Hypothesis]:

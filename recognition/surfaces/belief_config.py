@@ -28,6 +28,11 @@ class BeliefConfig:
     refine_clip_m : float
         In the refinement a residual counts at most this (metres): a touch far off a
         slid pose pulls it back, a gross outlier does not pull.
+    drift_sds : float
+        A hypothesis whose refinement after a touch moves p farther than this many
+        standard deviations of where it put p (along its least determined direction;
+        at least ``radius_m``) has come to another place, and its touches are counted
+        again there (:meth:`drift_reach_m`, :meth:`Belief._recounted`).
     min_posterior : float
         Hypotheses whose posterior falls below this are dropped after an update.
     unexplained_p : float
@@ -66,6 +71,7 @@ class BeliefConfig:
     max_hypotheses: int = 24
     refine_iterations: int = 4
     refine_clip_m: float = 2.0e-3
+    drift_sds: float = 3.0
     min_posterior: float = 1e-9
     unexplained_p: float = 1e-3
     radius_m: float = 1.0e-3
@@ -77,6 +83,12 @@ class BeliefConfig:
     prior_rotation_rad: float = 0.2
     prior_translation_m: float = 0.01
     touch_window_m: float = 10.0e-3
+
+    def drift_reach_m(self, location_covariance: NDArray[np.float64]) -> float:
+        """How far (metres) a refinement may move p of a hypothesis whose location has
+        this covariance (3, 3) before it counts as another place (``drift_sds``)."""
+        largest = float(np.linalg.eigvalsh(location_covariance).max())
+        return max(self.drift_sds * float(np.sqrt(max(largest, 0.0))), self.radius_m)
 
     def within_window(
         self,

@@ -562,3 +562,32 @@ def test_a_pose_found_along_a_valley_after_touches_counts_them_as_it_predicted_t
     (valley,) = [h for h in after.hypotheses if np.allclose(h.location, expected.location)]
     assert valley.touch_evidence == pytest.approx(evidence, abs=1e-9)
     assert valley.touch_evidence < after.best.touch_evidence - 10.0
+
+
+def test_a_hypothesis_a_touch_moves_beyond_its_uncertainty_counts_the_touches_again(database):
+    # a hypothesis whose refinement moves p farther than its own uncertainty explains has
+    # come to another place: the touches it predicted from where it was do not speak for
+    # it there, and they count again as it would have predicted each in turn. A pose
+    # 5 mm along the loose blob's valley, marked as certain to 0.1 mm, comes back to the
+    # place the touches pin; still allowed to move that far, it keeps what it predicted
+    found, touched = _loose_blob_and_two_touches(database)
+    config = replace(found.config, explore_hypotheses=0)
+    once = database.update(replace(found, config=config), touched[:1])
+    best = once.best
+    _, loose = once.loose_motions(best)[0]
+    away = replace(best, T_model_from_data=best.moved(5e-3 * loose))
+    sure = replace(away, location_covariance=np.eye(3) * (0.1e-3) ** 2)
+    moved = database.update(replace(once, hypotheses=(sure,)), touched[1:])
+    kept = database.update(
+        replace(once, hypotheses=(sure,), config=replace(config, drift_sds=1e9)), touched[1:]
+    )
+    assert len(moved.hypotheses) == len(kept.hypotheses) == 1
+    start = away.T_model_from_data
+    assert np.linalg.norm(moved.best.location - (start[:3, :3] @ once.point + start[:3, 3])) > 1e-3
+    # the same steps by hand: the refined pose, each touch predicted in turn from there
+    fresh = replace(moved, hypotheses=())
+    ((_, _, evidence),) = fresh._in_turn(
+        [("blob", kept.best.T_model_from_data, 0.0)], database.models
+    )
+    assert moved.best.touch_evidence == pytest.approx(evidence, abs=1e-9)
+    assert kept.best.touch_evidence != pytest.approx(evidence, abs=1e-3)
