@@ -236,7 +236,7 @@ class Belief:
             ],
             models,
             whitening,
-            [self.config.drift_reach_m(h.location_covariance) for h in self.hypotheses],
+            [self.config.drift_reach_m(h.location_sd_m) for h in self.hypotheses],
         )
 
     def with_poses(
@@ -446,7 +446,7 @@ class Belief:
         for h in top:
             if h.log_likelihood < best - config.explore_log_gap:
                 continue
-            if np.sqrt(np.linalg.eigvalsh(h.location_covariance).max()) < config.explore_sd_m:
+            if h.location_sd_m < config.explore_sd_m:
                 continue  # a pose this well determined has no valley to explore
             for _, direction in self.loose_motions(h):
                 for step in config.explore_steps_m:

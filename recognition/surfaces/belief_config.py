@@ -84,11 +84,11 @@ class BeliefConfig:
     prior_translation_m: float = 0.01
     touch_window_m: float = 10.0e-3
 
-    def drift_reach_m(self, location_covariance: NDArray[np.float64]) -> float:
-        """How far (metres) a refinement may move p of a hypothesis whose location has
-        this covariance (3, 3) before it counts as another place (``drift_sds``)."""
-        largest = float(np.linalg.eigvalsh(location_covariance).max())
-        return max(self.drift_sds * float(np.sqrt(max(largest, 0.0))), self.radius_m)
+    def drift_reach_m(self, location_sd_m: float) -> float:
+        """How far (metres) a refinement may move p of a hypothesis whose location is
+        this uncertain (:attr:`Hypothesis.location_sd_m`) before it counts as another
+        place (``drift_sds``)."""
+        return max(self.drift_sds * location_sd_m, self.radius_m)
 
     def within_window(
         self,

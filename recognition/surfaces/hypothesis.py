@@ -60,7 +60,9 @@ class Hypothesis:
         the object.
     touch_evidence : float
         Log ratio against "none of these" of the touches' contacts, each as this
-        hypothesis (or the pose it was refined from) predicted it before it was made.
+        hypothesis (or the pose it was refined from) predicted it before it was made;
+        counted again in turn where a refinement moved it beyond its uncertainty
+        (:attr:`BeliefConfig.drift_sds`).
     """
 
     model: str
@@ -75,6 +77,12 @@ class Hypothesis:
     location_covariance: Array = field(default_factory=lambda: np.zeros((3, 3)))
     location_images: Array = field(default_factory=lambda: np.zeros((0, 3)))
     touch_evidence: float = 0.0
+
+    @property
+    def location_sd_m(self) -> float:
+        """Standard deviation of ``location`` along its least determined direction,
+        metres."""
+        return float(np.sqrt(max(float(np.linalg.eigvalsh(self.location_covariance).max()), 0.0)))
 
     def nearest_location(self, point: Array) -> Array:
         """Of ``location`` and its symmetric images, the one nearest ``point`` (3,)."""
