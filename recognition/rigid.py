@@ -16,6 +16,7 @@ from scipy.spatial.transform import Rotation
 __all__ = [
     "apply_pose",
     "cross",
+    "point_to_plane_jacobian",
     "pose_matrix",
     "random_planar_motion",
     "random_rigid_motion",
@@ -41,6 +42,14 @@ def cross(a: ArrayLike, b: ArrayLike) -> Array:
     a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
     b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
     return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
+
+
+def point_to_plane_jacobian(points: ArrayLike, normals: ArrayLike, pivot: ArrayLike) -> Array:
+    """How far each point (..., n, 3) moves along its unit normal (..., n, 3) under a small
+    turn (radians, about ``pivot``) and a shift (metres), per unit of each: (..., n, 6),
+    the rows [(x - pivot) x n, n]."""
+    normals = np.asarray(normals)
+    return np.concatenate([cross(np.asarray(points) - pivot, normals), normals], axis=-1)
 
 
 def skew(w: ArrayLike) -> Array:

@@ -54,7 +54,7 @@ from scipy.linalg import lapack
 from scipy.special import gammaincinv
 
 from recognition.errors import InvalidArgument
-from recognition.rigid import cross, pose_matrix
+from recognition.rigid import point_to_plane_jacobian, pose_matrix
 from recognition.surfaces.belief_config import BeliefConfig
 from recognition.surfaces.closest_fit import refine_poses
 from recognition.surfaces.data_curves import DataCurves
@@ -502,7 +502,7 @@ class Belief:
         residuals' change under a turn about the pivot and a shift (outliers do not
         inform)."""
         pivot = moved[inliers].mean(axis=0) if inliers.any() else moved.mean(axis=0)
-        J = np.concatenate([cross(moved - pivot, normals), normals], axis=1)
+        J = point_to_plane_jacobian(moved, normals, pivot)
         J[~inliers] = 0.0
         prior = np.r_[
             np.full(3, self.config.prior_rotation_rad**-2),

@@ -8,7 +8,7 @@ from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
 from recognition.least_squares import LeastSquaresConfig, State, damped_least_squares
-from recognition.rigid import cross
+from recognition.rigid import point_to_plane_jacobian
 from recognition.surfaces.distance import MeshDistance
 
 __all__ = ["refine_poses"]
@@ -67,7 +67,7 @@ def refine_poses(
         X, distance, q, normals = state[2], state[3], state[4], state[5]
         r = np.einsum("kij,kij->ki", X - q, normals)
         c = X.mean(axis=1, keepdims=True)
-        J = np.concatenate([cross(X - c, normals), normals], axis=2)
+        J = point_to_plane_jacobian(X, normals, c)
         outliers = distance > threshold_m
         if whitening is not None:
             z = np.clip(r, -threshold_m, threshold_m) @ whitening.T

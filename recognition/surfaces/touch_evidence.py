@@ -43,7 +43,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from recognition.errors import InvalidArgument
-from recognition.rigid import cross
+from recognition.rigid import point_to_plane_jacobian
 from recognition.surfaces.distance import MeshDistance
 from recognition.surfaces.mesh_model import MeshModel
 from recognition.surfaces.noise_model import NoiseModel, huber
@@ -137,7 +137,7 @@ def predicted_evidence(
     # the touches as they are (a miss by millimetres is no outlier of the sensor)
     level = noise.outlier_level_m(sensor_m)
     residuals = np.concatenate([np.clip(signed[:-k], -level, level), signed[-k:]])
-    J = whitening_rows @ np.concatenate([cross(moved - pivot, surface), surface], axis=1)
+    J = whitening_rows @ point_to_plane_jacobian(moved, surface, pivot)
     spread = 1.0 / whitening_rows[np.arange(k), len(points) - k + np.arange(k)]
     score = point_evidence(
         whitening_rows @ residuals,

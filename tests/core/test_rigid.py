@@ -22,6 +22,21 @@ def test_skew_is_the_cross_product():
     np.testing.assert_allclose(rigid.cross(w[0], x[0]), np.cross(w[0], x[0]))
 
 
+def test_point_to_plane_jacobian_is_the_first_order_motion_along_the_normals():
+    # points moved by a small turn about a pivot and a shift: J (turn, shift) is how far
+    # each moves along its normal, to first order
+    rng = np.random.default_rng(2)
+    points, pivot = rng.normal(size=(30, 3)), rng.normal(size=3)
+    normals = rng.normal(size=(30, 3))
+    normals /= np.linalg.norm(normals, axis=1, keepdims=True)
+    step = 1e-6 * rng.normal(size=6)
+    R = Rotation.from_rotvec(step[:3]).as_matrix()
+    moved = (points - pivot) @ R.T + pivot + step[3:]
+    along = np.einsum("ij,ij->i", moved - points, normals)
+    J = rigid.point_to_plane_jacobian(points, normals, pivot)
+    np.testing.assert_allclose(J @ step, along, rtol=0, atol=1e-11)  # second order: 1e-12
+
+
 @pytest.mark.parametrize("axis", [0, 1, 2])
 def test_rotation_about_axis_and_its_derivative(axis):
     angle = np.linspace(-3.0, 3.0, 13)

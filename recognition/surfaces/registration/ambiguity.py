@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from recognition.rigid import cross
+from recognition.rigid import point_to_plane_jacobian
 from recognition.surfaces.registration.config import FastConfig
 from recognition.surfaces.registration.data import effective_noise_m
 
@@ -118,7 +118,8 @@ class Resolution:
         """
         centred = points - points.mean(axis=0)
         reach = max(float(np.max(np.linalg.norm(centred, axis=1))), 1e-12)
-        J = np.concatenate([cross(centred, normals) / reach, normals], axis=1)
+        J = point_to_plane_jacobian(points, normals, points.mean(axis=0))
+        J[:, :3] /= reach
         eigenvalues = np.linalg.eigvalsh(J.T @ J)
         limit = 2 * self.sigma_m**2 * self.log_ratio / self.motion_m**2
         return int(np.sum(eigenvalues <= limit))
