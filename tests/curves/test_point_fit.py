@@ -5,6 +5,7 @@ import copy
 
 import numpy as np
 import pytest
+from scipy.special import chdtrc, chdtri
 
 from recognition.curves import (
     CanonicalCurve,
@@ -15,6 +16,7 @@ from recognition.curves import (
 from recognition.curves.families import TREE_CLASSES
 from recognition.curves.recognition import canonical_parameters
 from recognition.curves.recognition import point_fit as pf
+from recognition.curves.recognition.tree import SMOOTH_MODES, smooth_statistic
 from recognition.errors import InvalidCurveData
 from recognition.rigid import apply_pose, random_planar_motion
 
@@ -131,3 +133,31 @@ def test_a_semicubical_arc_that_runs_up_to_its_cusp_is_fitted_exactly() -> None:
     own = fits[CurveKind.SEMICUBICAL_PARABOLA]
     assert own is not None and np.sqrt(own.sum_of_squares / len(points)) < 1e-6
     assert fits[CurveKind.ELLIPSE].sum_of_squares > 1e3 * own.sum_of_squares
+
+
+def test_a_smooth_misfit_within_the_sum_of_squares_refuses_the_class() -> None:
+    # a parabola bent by a smooth wave along its normal, 0.3 noise sd RMS: the sum of
+    # squared distances of the parabola's fit stays within its chi-square test, but the
+    # misfit lies in the residuals' smoothest modes along the curve, which the smooth
+    # test counts apart (signed residuals: their signs follow the wave)
+    sigma = 1e-4
+    curve = sample_by_arc_length(CanonicalCurve(CurveKind.PARABOLA, (1.5,)), -0.8, 1.2, 0.005)
+    rng = np.random.default_rng(3)
+    x = np.linspace(-1.0, 1.0, len(curve.points))
+    wave = 0.3 * sigma * np.sqrt(2.0) * np.cos(3.0 * np.pi * x)
+    tangent = np.gradient(curve.points, axis=0)
+    normal = np.stack([-tangent[:, 1], tangent[:, 0]], axis=1)
+    normal /= np.linalg.norm(normal, axis=1, keepdims=True)
+    points = curve.points + wave[:, None] * normal + sigma * rng.normal(size=curve.points.shape)
+    fit = pf.fit_classes(points)[CurveKind.PARABOLA]
+    assert fit is not None
+    assert abs(np.corrcoef(fit.distances, wave)[0, 1]) > 0.2
+    dof = len(points) - fit.n_unknowns
+    assert chdtrc(dof, fit.sum_of_squares / sigma**2) > 1e-2  # the sum of squares passes
+    result, _ = recognize_points(points, window=15, degree=3, kappa_window=15, noise=sigma)
+    (parabola,) = [c for c in result.candidates if c.kind is CurveKind.PARABOLA]
+    assert parabola.p_value < result.significance
+    assert result.kind is not CurveKind.PARABOLA
+    # white noise alone: the smooth modes hold about as much as any others
+    white = sigma * rng.normal(size=len(points))
+    assert smooth_statistic(points, white, SMOOTH_MODES) / sigma**2 < chdtri(SMOOTH_MODES, 1e-3)

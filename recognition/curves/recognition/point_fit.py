@@ -113,7 +113,8 @@ class PointFit:
     u : (n,) float
         Canonical parameter of each point's foot.
     distances : (n,) float
-        Distance of each point from the fitted curve.
+        Signed distance of each point from the fitted curve: positive to the left of the
+        curve's direction of increasing parameter.
     """
 
     kind: CurveKind
@@ -508,6 +509,8 @@ def _fit(
         return None
     g, u = solved
     r = _residuals(kind, g[None], u[None], q)[0][0] * scale
+    pos, vel, _, _ = _curve(kind, g[None], u[None], jacobian=False)
+    r = np.where(np.einsum("nc,nc->n", q - pos[0], vel[0] @ _J.T) < 0, -r, r)
     try:
         if kind in _POLYNOMIAL:
             reduction = _reduced(kind, g, centre, scale)

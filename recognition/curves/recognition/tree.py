@@ -38,10 +38,12 @@ __all__ = [
     "MAX_OUTLIER_FRACTION",
     "MIN_POINTS_FOR_OUTLIERS",
     "OUTLIER_FACTOR",
+    "SMOOTH_MODES",
     "estimated_uncertainty",
     "fit_class",
     "recognize_curve",
     "recognize_points",
+    "smooth_statistic",
 ]
 
 #: The reduced relative residual of a consistent class in the ``tolerance`` mode as it
@@ -54,6 +56,10 @@ COMPLEXITY_FACTOR = 3.0
 #: errors of kappa up to about 5e-11, which a floor of 1e-12 understated, refusing 2-7 of
 #: 100 noise-free parabolas), and radians for the angles.
 ESTIMATE_PRECISION = 1e-10
+
+#: Points decided by their fits: the residuals' smoothest modes along the curve tested
+#: apart (:func:`smooth_statistic`).
+SMOOTH_MODES = 10
 
 #: A point whose residual exceeds this multiple of the median is an estimation outlier.
 OUTLIER_FACTOR = 5.0
@@ -189,11 +195,22 @@ def _standing(fit: ClassFit) -> tuple[float, float]:
     return (-p, reduced if np.isfinite(reduced) else float("inf"))
 
 
-def _choose_by_test(fits: Sequence[ClassFit], significance: float) -> ClassFit | None:
+def _fitted_better(fit: ClassFit) -> float:
+    """Sort key of point fits of one level (as many unknowns each): the sum of squared
+    distances, the likelihood's order (noise in the points counts alike in every fit)."""
+    return fit.statistic if np.isfinite(fit.statistic) else float("inf")
+
+
+def _choose_by_test(
+    fits: Sequence[ClassFit],
+    significance: float,
+    better: Callable[[ClassFit], Any] = _standing,
+) -> ClassFit | None:
     """The class the chi-square tests support, or None.
 
     The consistent classes are those with p-value >= ``significance``. The simplest
-    level with a consistent class gives the first choice (the best-fitting there); a
+    level with a consistent class gives the first choice (the best-fitting there, least
+    by ``better``); a
     consistent class of a higher level replaces it when its statistic is lower by more
     than the ``1 - significance`` quantile of chi-square with the difference in
     parameters as degrees of freedom (a likelihood-ratio test: the classes are nested,
@@ -203,9 +220,9 @@ def _choose_by_test(fits: Sequence[ClassFit], significance: float) -> ClassFit |
     if not consistent:
         return None
     levels = sorted({N_PARAMETERS[f.kind] for f in consistent})
-    chosen = min((f for f in consistent if N_PARAMETERS[f.kind] == levels[0]), key=_standing)
+    chosen = min((f for f in consistent if N_PARAMETERS[f.kind] == levels[0]), key=better)
     for level in levels[1:]:
-        candidate = min((f for f in consistent if N_PARAMETERS[f.kind] == level), key=_standing)
+        candidate = min((f for f in consistent if N_PARAMETERS[f.kind] == level), key=better)
         extra = N_PARAMETERS[candidate.kind] - N_PARAMETERS[chosen.kind]
         margin = max(chosen.scale, candidate.scale) * chdtri(extra, significance)
         if chosen.statistic - candidate.statistic > margin:
@@ -376,23 +393,54 @@ def estimated_uncertainty(geometry: LocalGeometry) -> InputUncertainty:
     return InputUncertainty.from_covariance(cov + np.diag(floor**2))
 
 
+def _tail(statistic: float, dof: float, noise_dof: float) -> float:
+    """P(X >= statistic) for X the sum of ``dof`` squared standard normals over the noise
+    variance: chi-square with a known noise (``noise_dof`` infinite), else ``dof`` times
+    F(dof, noise_dof), the noise estimated on ``noise_dof`` degrees of freedom."""
+    if np.isinf(noise_dof):
+        return float(chdtrc(dof, statistic))
+    return float(fdtrc(dof, noise_dof, statistic / dof))
+
+
+def smooth_statistic(points: np.ndarray, residuals: np.ndarray, modes: int) -> float:
+    """Squared length of the signed ``residuals`` (n,) of a fit to ordered ``points``
+    (n, 2) projected on the ``modes`` lowest-degree polynomials of arc length along the
+    points (orthonormal over the points; Neyman's smooth test). Noise leaves about as
+    much in each mode as in any other; a curve of another shape leaves its misfit,
+    smooth along the curve, in the lowest ones."""
+    s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(points, axis=0), axis=1))])
+    x = 2.0 * s / max(s[-1], 1e-300) - 1.0
+    basis, _ = np.linalg.qr(np.polynomial.legendre.legvander(x, modes - 1))
+    return float(np.sum((basis.T @ residuals) ** 2))
+
+
 def _point_class_fit(
-    fit: PointFit | None, kind: CurveKind, used: LocalGeometry, noise: float, noise_dof: float
+    fit: PointFit | None,
+    kind: CurveKind,
+    used: LocalGeometry,
+    points: np.ndarray,
+    noise: float,
+    noise_dof: float,
 ) -> ClassFit:
     """A class fitted to the points as a :class:`ClassFit`: its statistic is the sum of
-    squared distances over the noise variance; with the noise estimated on ``noise_dof``
-    degrees of freedom its p-value is the F test's (chi-square when the noise is known,
-    ``noise_dof`` infinite)."""
+    squared distances over the noise variance, tested by chi-square (the noise known,
+    ``noise_dof`` infinite) or F (the noise estimated on ``noise_dof`` degrees of
+    freedom); so is the part of it in the residuals' ``SMOOTH_MODES`` smoothest modes
+    along the curve (:func:`smooth_statistic`), where a wrong class leaves its misfit.
+    The p-value is the smaller of the two tests' doubled (Bonferroni): a class is refused
+    when either refuses it at half the significance."""
     if fit is None:
         return rejected(kind, "no least-squares fit to the points converged")
     dof = fit.distances.size - fit.n_unknowns
     statistic = fit.sum_of_squares / noise**2
+    modes = min(SMOOTH_MODES, dof)
     if dof <= 0:
         p_value = float("nan")
-    elif np.isinf(noise_dof):
-        p_value = float(chdtrc(dof, statistic))
     else:
-        p_value = float(fdtrc(dof, noise_dof, statistic / dof))
+        smooth = smooth_statistic(points, fit.distances, modes) / noise**2
+        p_value = min(
+            1.0, 2.0 * min(_tail(statistic, dof, noise_dof), _tail(smooth, modes, noise_dof))
+        )
     u = fit.u[used.index]
     theta = fit.reduction.theta
     orientation = 1 if np.median(np.diff(fit.u)) >= 0 else -1
@@ -419,8 +467,11 @@ def _recognize_by_points(
     """Every class fitted to the points themselves (:mod:`.point_fit`), decided as the
     tree decides (:func:`_choose_by_test`)."""
     fitted = fit_classes(points)
-    fits = [_point_class_fit(fitted[kind], kind, used, noise, noise_dof) for kind in TREE_CLASSES]
-    chosen = _choose_by_test(fits, significance)
+    fits = [
+        _point_class_fit(fitted[kind], kind, used, points, noise, noise_dof)
+        for kind in TREE_CLASSES
+    ]
+    chosen = _choose_by_test(fits, significance, _fitted_better)
     return _decision(chosen, fits, significance, decided_by="points", noise=noise)
 
 
