@@ -55,7 +55,8 @@ class ClassFit:
         ``scale * chi2(dof)`` (``scale`` 1 and ``dof`` residuals minus unknowns for
         independent errors).
     p_value : float
-        Probability of a statistic at least this large for data of this class; 0 when
+        Probability of a statistic at least this large for data of this class (a fit to
+        points: the smaller of its two tests' doubled, :func:`recognize_points`); 0 when
         rejected, NaN when no degree of freedom is left.
     """
 

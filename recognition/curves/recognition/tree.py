@@ -210,11 +210,11 @@ def _choose_by_test(
 
     The consistent classes are those with p-value >= ``significance``. The simplest
     level with a consistent class gives the first choice (the best-fitting there, least
-    by ``better``); a
-    consistent class of a higher level replaces it when its statistic is lower by more
-    than the ``1 - significance`` quantile of chi-square with the difference in
-    parameters as degrees of freedom (a likelihood-ratio test: the classes are nested,
-    a parabola is a conic and a spline, a semi-cubical parabola a spline with c = 0).
+    by ``better``); a consistent class of a higher level replaces it when its statistic
+    is lower by more than the ``1 - significance`` quantile of chi-square with the
+    difference in parameters as degrees of freedom (a likelihood-ratio test: the classes
+    are nested, a parabola is a conic and a spline, a semi-cubical parabola a spline with
+    c = 0).
     """
     consistent = [f for f in fits if np.isfinite(f.p_value) and f.p_value >= significance]
     if not consistent:
@@ -433,10 +433,10 @@ def _point_class_fit(
         return rejected(kind, "no least-squares fit to the points converged")
     dof = fit.distances.size - fit.n_unknowns
     statistic = fit.sum_of_squares / noise**2
-    modes = min(SMOOTH_MODES, dof)
     if dof <= 0:
         p_value = float("nan")
     else:
+        modes = min(SMOOTH_MODES, dof)
         smooth = smooth_statistic(points, fit.distances, modes) / noise**2
         p_value = min(
             1.0, 2.0 * min(_tail(statistic, dof, noise_dof), _tail(smooth, modes, noise_dof))
