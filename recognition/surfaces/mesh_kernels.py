@@ -10,10 +10,10 @@ libigl's), whatever the point's distance: a far point searches more cells, not f
 ray walks the cells it crosses in order and stops at the first that holds a hit.
 
 On the catalog's meshes (90k-190k faces; ``docs/benchmarks/mesh_distance.md``) a grid is
-built in 9-40 ms and holds 42 bytes per face (the cell lists and each face's bounding
-sphere), against 80-270 ms and about 220 bytes per face for libigl's AABB tree; it
-answers 0.6-0.9 times as many queries per second near the surface and half as many 3 mm
-off it. A search over a hundred models builds and keeps one for every model it polishes
+built in 5-23 ms and holds 42 bytes per face (the cell lists and each face's bounding
+sphere), against 46-119 ms and about 220 bytes per face for libigl's AABB tree; it
+answers 0.7-1.6 times as many queries per second near the surface and 0.3-0.6 times as
+many 3 mm off it. A search over a hundred models builds and keeps one for every model it polishes
 on: there, building and memory count, not a query's last microsecond.
 """
 
