@@ -339,16 +339,16 @@ class Belief:
         farther than its ``reach`` (metres) counted again: it has come to another place,
         for which the touches it predicted from where it was do not speak, and there
         its touches count as it would have predicted each in turn (:meth:`_in_turn`)."""
-        far = []
+        far, kept = [], []
         for h, k in zip(found, _fitted_order([name for name, _, _ in hypotheses]), strict=True):
             T = hypotheses[k][1]
             if np.linalg.norm(h.location - (T[:3, :3] @ self.point + T[:3, 3])) > reach[k]:
-                far.append(h)
+                far.append((h.model, h.T_model_from_data, 0.0))
+            else:
+                kept.append(h)
         if not far:
             return found
-        again = self._in_turn([(h.model, h.T_model_from_data, 0.0) for h in far], models)
-        kept = [h for h in found if all(h is not f for f in far)]
-        return kept + self._fitted(again, models, whitening)
+        return kept + self._fitted(self._in_turn(far, models), models, whitening)
 
     def _whitening(self) -> Array:
         """The inverse of the lower Cholesky factor of Sigma over :attr:`points`."""
