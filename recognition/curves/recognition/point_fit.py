@@ -79,6 +79,9 @@ SCREEN = replace(SOLVER, max_iterations=12)
 FINISHED = 3
 #: Newton steps of the foot-point search after each move of the curve.
 FOOT_ITERATIONS = 4
+#: Singular values of a fit's Jacobian below this fraction of the largest are
+#: reparametrisations of the curve (no change of the distances).
+RANK_TOLERANCE = 1e-6
 #: Rounds of parameter correction (Hoschek) of the polynomial fits that start the search.
 CORRECTION_ROUNDS = 20
 
@@ -115,12 +118,17 @@ class PointFit:
     distances : (n,) float
         Signed distance of each point from the fitted curve: positive to the left of the
         curve's direction of increasing parameter.
+    fitted : (n, r) float
+        Orthonormal basis of the changes of ``distances`` that the fit's unknowns make
+        (the range of their Jacobian at the fit): noise in these directions the fit
+        absorbs, and the residuals are orthogonal to them.
     """
 
     kind: CurveKind
     reduction: CanonicalReduction
     u: np.ndarray
     distances: np.ndarray
+    fitted: np.ndarray
 
     @property
     def sum_of_squares(self) -> float:
@@ -508,9 +516,14 @@ def _fit(
     if solved is None:
         return None
     g, u = solved
-    r = _residuals(kind, g[None], u[None], q)[0][0] * scale
+    r, jacobian = (a[0] for a in _residuals(kind, g[None], u[None], q))
     pos, vel, _, _ = _curve(kind, g[None], u[None], jacobian=False)
-    r = np.where(np.einsum("nc,nc->n", q - pos[0], vel[0] @ _J.T) < 0, -r, r)
+    sign = np.where(np.einsum("nc,nc->n", q - pos[0], vel[0] @ _J.T) < 0, -1.0, 1.0)
+    r = sign * r * scale
+    fitted = np.zeros((len(r), 0))
+    if np.isfinite(jacobian).all():
+        left, singular, _ = np.linalg.svd(sign[:, None] * jacobian, full_matrices=False)
+        fitted = left[:, singular > RANK_TOLERANCE * singular[0]]
     try:
         if kind in _POLYNOMIAL:
             reduction = _reduced(kind, g, centre, scale)
@@ -519,7 +532,7 @@ def _fit(
             reduction, u = _conic_reduction(kind, g, u, centre, scale)
     except DegenerateGeometry:
         return None
-    return PointFit(kind, reduction, u, r)
+    return PointFit(kind, reduction, u, r, fitted)
 
 
 def fit_classes(points: ArrayLike) -> dict[CurveKind, PointFit | None]:

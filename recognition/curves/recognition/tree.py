@@ -57,9 +57,13 @@ COMPLEXITY_FACTOR = 3.0
 #: 100 noise-free parabolas), and radians for the angles.
 ESTIMATE_PRECISION = 1e-10
 
-#: Points decided by their fits: the residuals' smoothest modes along the curve tested
-#: apart (:func:`smooth_statistic`).
-SMOOTH_MODES = 10
+#: Points decided by their fits: the residuals' smoothest modes along the curve (the
+#: polynomials of arc length up to degree 3), beyond what the fit's unknowns change,
+#: tested apart (:func:`smooth_statistic`).
+SMOOTH_MODES = 4
+#: Directions of those modes whose part beyond the fit's changes is shorter than this
+#: (the modes being of unit length) are left out.
+SMOOTH_RANK_TOLERANCE = 1e-3
 
 #: A point whose residual exceeds this multiple of the median is an estimation outlier.
 OUTLIER_FACTOR = 5.0
@@ -402,16 +406,27 @@ def _tail(statistic: float, dof: float, noise_dof: float) -> float:
     return float(fdtrc(dof, noise_dof, statistic / dof))
 
 
-def smooth_statistic(points: np.ndarray, residuals: np.ndarray, modes: int) -> float:
+def smooth_statistic(
+    points: np.ndarray, residuals: np.ndarray, modes: int, fitted: np.ndarray | None = None
+) -> tuple[float, int]:
     """Squared length of the signed ``residuals`` (n,) of a fit to ordered ``points``
     (n, 2) projected on the ``modes`` lowest-degree polynomials of arc length along the
-    points (orthonormal over the points; Neyman's smooth test). Noise leaves about as
-    much in each mode as in any other; a curve of another shape leaves its misfit,
-    smooth along the curve, in the lowest ones."""
+    points (orthonormal over the points; Neyman's smooth test), and its degrees of freedom.
+
+    ``fitted`` (n, r), an orthonormal basis of the changes of the residuals that the fit's
+    unknowns make, is first taken out of those modes: the fit absorbs the noise there (a
+    rigid motion and a shape parameter change a curve's distances smoothly), so that the
+    remaining modes hold noise alone (chi-square with as many degrees of freedom as they
+    span) and a curve of another shape leaves its misfit, smooth along the curve, in them.
+    """
     s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(points, axis=0), axis=1))])
     x = 2.0 * s / max(s[-1], 1e-300) - 1.0
     basis, _ = np.linalg.qr(np.polynomial.legendre.legvander(x, modes - 1))
-    return float(np.sum((basis.T @ residuals) ** 2))
+    if fitted is not None and fitted.size:
+        basis = basis - fitted @ (fitted.T @ basis)
+        left, singular, _ = np.linalg.svd(basis, full_matrices=False)
+        basis = left[:, singular > SMOOTH_RANK_TOLERANCE]
+    return float(np.sum((basis.T @ residuals) ** 2)), basis.shape[1]
 
 
 def _point_class_fit(
@@ -426,7 +441,8 @@ def _point_class_fit(
     squared distances over the noise variance, tested by chi-square (the noise known,
     ``noise_dof`` infinite) or F (the noise estimated on ``noise_dof`` degrees of
     freedom); so is the part of it in the residuals' ``SMOOTH_MODES`` smoothest modes
-    along the curve (:func:`smooth_statistic`), where a wrong class leaves its misfit.
+    along the curve beyond the fit's own changes, on as many degrees of freedom as those
+    span (:func:`smooth_statistic`), where a wrong class leaves its misfit.
     The p-value is the smaller of the two tests' doubled (Bonferroni): a class is refused
     when either refuses it at half the significance."""
     if fit is None:
@@ -436,11 +452,9 @@ def _point_class_fit(
     if dof <= 0:
         p_value = float("nan")
     else:
-        modes = min(SMOOTH_MODES, dof)
-        smooth = smooth_statistic(points, fit.distances, modes) / noise**2
-        p_value = min(
-            1.0, 2.0 * min(_tail(statistic, dof, noise_dof), _tail(smooth, modes, noise_dof))
-        )
+        smooth, modes = smooth_statistic(points, fit.distances, SMOOTH_MODES, fit.fitted)
+        p_smooth = _tail(smooth / noise**2, modes, noise_dof) if modes else 1.0
+        p_value = min(1.0, 2.0 * min(_tail(statistic, dof, noise_dof), p_smooth))
     u = fit.u[used.index]
     theta = fit.reduction.theta
     orientation = 1 if np.median(np.diff(fit.u)) >= 0 else -1
