@@ -37,6 +37,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from numpy.polynomial import polynomial as P
 from numpy.typing import ArrayLike
+from scipy.linalg import orth
 
 from recognition.curves.families import (
     N_PARAMETERS,
@@ -522,8 +523,7 @@ def _fit(
     r = sign * r * scale
     fitted = np.zeros((len(r), 0))
     if np.isfinite(jacobian).all():
-        left, singular, _ = np.linalg.svd(sign[:, None] * jacobian, full_matrices=False)
-        fitted = left[:, singular > RANK_TOLERANCE * singular[0]]
+        fitted = orth(sign[:, None] * jacobian, rcond=RANK_TOLERANCE)
     try:
         if kind in _POLYNOMIAL:
             reduction = _reduced(kind, g, centre, scale)

@@ -9,6 +9,7 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
+from scipy.linalg import orth
 from scipy.special import chdtrc, chdtri, fdtrc
 
 from recognition.curves.estimation import LocalGeometry, local_fit_geometry
@@ -62,7 +63,7 @@ ESTIMATE_PRECISION = 1e-10
 #: tested apart (:func:`smooth_statistic`).
 SMOOTH_MODES = 4
 #: Directions of those modes whose part beyond the fit's changes is shorter than this
-#: (the modes being of unit length) are left out.
+#: fraction of the longest are left out.
 SMOOTH_RANK_TOLERANCE = 1e-3
 
 #: A point whose residual exceeds this multiple of the median is an estimation outlier.
@@ -423,9 +424,7 @@ def smooth_statistic(
     x = 2.0 * s / max(s[-1], 1e-300) - 1.0
     basis, _ = np.linalg.qr(np.polynomial.legendre.legvander(x, modes - 1))
     if fitted is not None and fitted.size:
-        basis = basis - fitted @ (fitted.T @ basis)
-        left, singular, _ = np.linalg.svd(basis, full_matrices=False)
-        basis = left[:, singular > SMOOTH_RANK_TOLERANCE]
+        basis = orth(basis - fitted @ (fitted.T @ basis), rcond=SMOOTH_RANK_TOLERANCE)
     return float(np.sum((basis.T @ residuals) ** 2)), basis.shape[1]
 
 
