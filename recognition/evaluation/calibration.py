@@ -16,7 +16,13 @@ from typing import Any
 
 import numpy as np
 
-from recognition.evaluation.diagnosis import CAUSES, cause
+from recognition.evaluation.diagnosis import (
+    APART_SDS,
+    CAUSES,
+    TELLING_SHARE,
+    cause,
+    touch_could_tell,
+)
 from recognition.evaluation.records import Record, read_results
 from recognition.evaluation.reports import machine
 from recognition.files import write_json_atomic
@@ -123,14 +129,16 @@ def miss_causes(records: Sequence[Record], after_touches: bool = False) -> dict[
     """The wrong answers (after the curves, or after the touches) by cause
     (:func:`~recognition.evaluation.diagnosis.cause`): ``wrong``, then the count of each
     of :data:`~recognition.evaluation.diagnosis.CAUSES` and ``unknown`` (no diagnosis:
-    the true pose unknown, or a record written without one)."""
-    counts = dict.fromkeys(("wrong", *CAUSES, "unknown"), 0)
+    the true pose unknown, or a record written without one), and ``telling``, those a
+    touch could still refute (:func:`~recognition.evaluation.diagnosis.touch_could_tell`)."""
+    counts = dict.fromkeys(("wrong", *CAUSES, "unknown", "telling"), 0)
     for r in records:
         if r.confidence is None or r.answered_right(after_touches):
             continue
         fit = r.touches.get("truth_fit") if after_touches and r.touches else r.truth_fit
         counts["wrong"] += 1
         counts[cause(fit) or "unknown"] += 1
+        counts["telling"] += touch_could_tell(fit)
     return counts
 
 
@@ -140,7 +148,11 @@ def _causes_text(counts: Mapping[str, int]) -> str:
         f"{counts['wrong']} wrong: {counts['search']} where the true pose fits all the "
         f"contact at least ten times likelier than the answer (no search proposed it), "
         f"{counts['tie']} within ten times either way, {counts['data']} where the data "
-        f"favour the answer" + (f", {counts['unknown']} not diagnosed" if counts["unknown"] else "")
+        f"favour the answer"
+        + (f", {counts['unknown']} not diagnosed" if counts["unknown"] else "")
+        + f"; {counts.get('telling', 0)} of the {counts['wrong']} stand more than "
+        f"{APART_SDS:g} noise sd apart from the truth on at least {100 * TELLING_SHARE:g} % "
+        "of their surface (a touch there would tell)"
     )
 
 

@@ -4,6 +4,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from scipy.spatial.transform import Rotation
 from testing_meshes import blob, ellipsoid, sphere
 
 from recognition import (
@@ -16,7 +17,7 @@ from recognition import (
     TouchLimits,
     verify,
 )
-from recognition.evaluation.diagnosis import cause, truth_fit
+from recognition.evaluation.diagnosis import cause, surface_apart, touch_could_tell, truth_fit
 from recognition.surfaces.active_touch import LOST_WITHIN_M
 from recognition.surfaces.belief import Belief
 from recognition.surfaces.mesh_model import MeshModel
@@ -528,9 +529,31 @@ def test_the_diagnosis_tells_a_missed_truth_from_data_that_favour_the_answer(dat
     fit = truth_fit(database.models, wrong, *truth)
     assert fit is not None and fit["log_ratio"] > 100 and fit["error_mm"] < 0.1
     assert cause(fit) == "search"
+    # the sphere stands apart from the blob on most of its surface: a touch would tell
+    assert fit["apart"] > 0.5 and touch_could_tell(fit)
     right = database.recognize(synthetic.curves, models=["blob"]).belief
     fit = truth_fit(database.models, right, *truth)
     assert fit is not None and abs(fit["log_ratio"]) < 1 and cause(fit) == "tie"
+
+
+def test_a_pose_stands_apart_from_the_truth_where_a_touch_would_tell(database):
+    # a sphere turned about its centre is the same surface (apart nowhere); the blob
+    # turned as much, or shifted by 1 mm, stands apart on much of it; the same pose nowhere
+    def turned(model, degrees):
+        centre = np.asarray(model.mesh.centroid)
+        T = np.eye(4)
+        T[:3, :3] = Rotation.from_euler("z", degrees, degrees=True).as_matrix()
+        T[:3, 3] = centre - T[:3, :3] @ centre
+        return T
+
+    sphere, blob = database["sphere"], database["blob"]
+    truth = np.eye(4)
+    assert surface_apart(sphere, turned(sphere, 40.0), sphere, truth, 0.15e-3) < 0.01
+    assert surface_apart(blob, truth, blob, truth, 0.15e-3) == 0.0
+    assert surface_apart(blob, turned(blob, 40.0), blob, truth, 0.15e-3) > 0.5
+    shifted = np.eye(4)
+    shifted[0, 3] = 1e-3
+    assert surface_apart(blob, shifted, blob, truth, 0.15e-3) > 0.3
 
 
 def test_a_pose_found_along_a_valley_after_touches_counts_them_as_it_predicted_them(
