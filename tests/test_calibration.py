@@ -114,10 +114,21 @@ def test_wrong_answers_are_counted_by_the_cause_their_truth_fit_names() -> None:
     records.append(_record(0.999, 0.1))  # right: no diagnosis, not counted
     counts = miss_causes(records)
     # a touch could refute the answer that stands apart on 40 % of its surface, not 5 %
-    assert counts == {"wrong": 5, "search": 1, "tie": 1, "data": 2, "unknown": 1, "telling": 1}
+    assert counts == {
+        "wrong": 5,
+        "search": 1,
+        "tie": 1,
+        "data": 2,
+        "unknown": 1,
+        "measured": 2,
+        "telling": 1,
+    }
     touched = [replace(_record(0.3, 5.0, after=0.4, after_model="dog", made=5), truth_fit=None)]
     touched[0].touches["truth_fit"] = {"log_ratio": 4.0, "error_mm": 0.1}  # type: ignore[index]
     assert miss_causes(touched, after_touches=True)["search"] == 1
     assert miss_causes(touched)["unknown"] == 1
     assert "1 where the true pose fits all the contact" in touches_section(touched)
-    assert "0 of the 1 stand more than 3 noise sd apart" in touches_section(touched)
+    # a diagnosis without the measure of how far it stands apart says nothing of it
+    assert "noise sd apart" not in touches_section(touched)
+    touched[0].touches["truth_fit"]["apart"] = 0.3  # type: ignore[index]
+    assert "1 of the 1 measured stand more than 3 noise sd apart" in touches_section(touched)

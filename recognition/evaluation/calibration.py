@@ -129,15 +129,17 @@ def miss_causes(records: Sequence[Record], after_touches: bool = False) -> dict[
     """The wrong answers (after the curves, or after the touches) by cause
     (:func:`~recognition.evaluation.diagnosis.cause`): ``wrong``, then the count of each
     of :data:`~recognition.evaluation.diagnosis.CAUSES` and ``unknown`` (no diagnosis:
-    the true pose unknown, or a record written without one), and ``telling``, those a
+    the true pose unknown, or a record written without one), ``measured``, those whose
+    diagnosis says how far the answer stands apart from the truth, and ``telling``, those a
     touch could still refute (:func:`~recognition.evaluation.diagnosis.touch_could_tell`)."""
-    counts = dict.fromkeys(("wrong", *CAUSES, "unknown", "telling"), 0)
+    counts = dict.fromkeys(("wrong", *CAUSES, "unknown", "measured", "telling"), 0)
     for r in records:
         if r.confidence is None or r.answered_right(after_touches):
             continue
         fit = r.touches.get("truth_fit") if after_touches and r.touches else r.truth_fit
         counts["wrong"] += 1
         counts[cause(fit) or "unknown"] += 1
+        counts["measured"] += fit is not None and "apart" in fit
         counts["telling"] += touch_could_tell(fit)
     return counts
 
@@ -150,9 +152,13 @@ def _causes_text(counts: Mapping[str, int]) -> str:
         f"{counts['tie']} within ten times either way, {counts['data']} where the data "
         f"favour the answer"
         + (f", {counts['unknown']} not diagnosed" if counts["unknown"] else "")
-        + f"; {counts.get('telling', 0)} of the {counts['wrong']} stand more than "
-        f"{APART_SDS:g} noise sd apart from the truth on at least {100 * TELLING_SHARE:g} % "
-        "of their surface (a touch there would tell)"
+        + (
+            f"; {counts['telling']} of the {counts['measured']} measured stand more than "
+            f"{APART_SDS:g} noise sd apart from the truth on at least "
+            f"{100 * TELLING_SHARE:g} % of their surface (a touch there would tell)"
+            if counts.get("measured")
+            else ""
+        )
     )
 
 
