@@ -25,6 +25,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from recognition.evaluation.records import RIGHT_WITHIN_MM
+from recognition.rigid import apply_pose
 from recognition.surfaces.belief import Belief
 from recognition.surfaces.mesh_model import MeshModel
 
@@ -66,9 +67,8 @@ def surface_apart(
     (model from data) puts farther than ``threshold_m`` from ``truth``'s surface at
     ``T_truth``: where a touch would tell them apart (anywhere on the surface, whether or
     not a robot may reach it)."""
-    vertices = np.asarray(answer.vertices)[::_VERTEX_STRIDE]
     T = np.asarray(T_truth, float) @ np.linalg.inv(np.asarray(T_answer, float))
-    placed = vertices @ T[:3, :3].T + T[:3, 3]
+    placed = apply_pose(T, np.asarray(answer.vertices)[::_VERTEX_STRIDE])
     return float(np.mean(np.abs(truth.distance.signed(placed)) > threshold_m))
 
 

@@ -4,7 +4,6 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from scipy.spatial.transform import Rotation
 from testing_meshes import blob, ellipsoid, sphere
 
 from recognition import (
@@ -18,6 +17,7 @@ from recognition import (
     verify,
 )
 from recognition.evaluation.diagnosis import cause, surface_apart, touch_could_tell, truth_fit
+from recognition.rigid import pose_matrix, rotation_about
 from recognition.surfaces.active_touch import LOST_WITHIN_M
 from recognition.surfaces.belief import Belief
 from recognition.surfaces.mesh_model import MeshModel
@@ -541,18 +541,15 @@ def test_a_pose_stands_apart_from_the_truth_where_a_touch_would_tell(database):
     # turned as much, or shifted by 1 mm, stands apart on much of it; the same pose nowhere
     def turned(model, degrees):
         centre = np.asarray(model.mesh.centroid)
-        T = np.eye(4)
-        T[:3, :3] = Rotation.from_euler("z", degrees, degrees=True).as_matrix()
-        T[:3, 3] = centre - T[:3, :3] @ centre
-        return T
+        R = rotation_about(2, np.deg2rad(degrees))
+        return pose_matrix(R, centre - R @ centre)
 
     sphere, blob = database["sphere"], database["blob"]
     truth = np.eye(4)
     assert surface_apart(sphere, turned(sphere, 40.0), sphere, truth, 0.15e-3) < 0.01
     assert surface_apart(blob, truth, blob, truth, 0.15e-3) == 0.0
     assert surface_apart(blob, turned(blob, 40.0), blob, truth, 0.15e-3) > 0.5
-    shifted = np.eye(4)
-    shifted[0, 3] = 1e-3
+    shifted = pose_matrix(np.eye(3), [1e-3, 0.0, 0.0])
     assert surface_apart(blob, shifted, blob, truth, 0.15e-3) > 0.3
 
 
