@@ -156,7 +156,7 @@ def _causes_text(counts: Mapping[str, int]) -> str:
             f"; {counts['telling']} of the {counts['measured']} measured stand more than "
             f"{APART_SDS:g} noise sd apart from the truth on at least "
             f"{100 * TELLING_SHARE:g} % of their surface (a touch there would tell)"
-            if counts.get("measured")
+            if counts["measured"]
             else ""
         )
     )
