@@ -114,7 +114,7 @@ class Belief:
     curves : DataCurves or None
         The curves the belief started from (a broader search can start again from them).
     broadened : int or None
-        How many touches' contact points the last broader search that added its poses
+        How many touches (:attr:`touches`) the last broader search that added its poses
         (:meth:`with_poses`) had (None: none has).
     """
 
@@ -131,6 +131,12 @@ class Belief:
     unexplained: float = 0.0
     curves: DataCurves | None = field(default=None, repr=False)
     broadened: int | None = None
+
+    @property
+    def touches(self) -> int:
+        """How many touches the belief has had: those that met the surface and those that
+        met nothing (:attr:`misses`)."""
+        return len(self.windows) + len(self.misses)
 
     @property
     def best(self) -> Hypothesis | None:
@@ -250,7 +256,7 @@ class Belief:
         usable = [(n, np.asarray(T, float), 0.0) for n, T in poses if n in models]
         if usable and len(self.windows):
             usable = self._in_turn(usable, models)
-        return replace(self._rescored([*known, *usable], models), broadened=len(self.windows))
+        return replace(self._rescored([*known, *usable], models), broadened=self.touches)
 
     def _in_turn(
         self, poses: Sequence[tuple[str, Array, float]], models: Mapping[str, MeshModel]

@@ -307,8 +307,9 @@ class ModelDatabase:
         ``RIVAL_MISS_M`` is left out (it could not compete); of the others, those a
         recognition would keep (:meth:`BeliefConfig.within_window`: within the window of
         the least error on the curves) join. Unchanged without curves, or when a broader
-        search has already had all its touches."""
-        if belief.curves is None or belief.broadened == len(belief.windows):
+        search has already had all its touches (:attr:`Belief.touches`: those that met
+        nothing too, which rule out poses the last search kept)."""
+        if belief.curves is None or belief.broadened == belief.touches:
             return belief
         touches = belief.points[belief.n_curve_points :]
         field_of = self.field_of
@@ -352,6 +353,7 @@ class ModelDatabase:
                 belief.normals[sensed],
                 outlier_threshold_m(data_noise_m(belief.curves), wide),
                 seed=len(belief.windows),
+                misses=belief.misses,
             )
         # a pose that misses a touch could not compete; of the others, as a recognition's
         # poses become hypotheses (Belief.of): those that fit the curves within the window

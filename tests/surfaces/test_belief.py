@@ -116,7 +116,7 @@ def test_touches_tell_two_similar_models_apart(database):
     assert 1 <= len(done.steps) <= 5
     assert done.stop == "sure"
     # sure after a touch only once a broader search with all the touches found no rival
-    assert done.belief.broadened == len(done.belief.windows)
+    assert done.belief.broadened == done.belief.touches
     # the ellipsoid's mirror images are the same answer
     images = done.belief.best.location_images
     assert len(images) > 1
@@ -389,6 +389,11 @@ def test_a_broader_search_runs_once_per_touch(database):
     assert database.broaden(broad) is broad  # no new touch: nothing to search again
     touched = database.update(broad, broad.point[None])  # a touch at p, where the curves meet
     assert touched.broadened == 0 and database.broaden(touched).broadened == 1
+    # a touch that met nothing rules poses out: it too is searched with again
+    away = broad.point + 0.05 * np.array([0.0, 0.0, 1.0])
+    missed = database.update(database.broaden(touched), misses=[(away, [0.0, 0.0, 1.0], 0.01)])
+    assert missed.touches == 2 and missed.broadened == 1
+    assert database.broaden(missed).broadened == 2
 
 
 def test_a_broader_search_counts_outliers_as_the_recognition_did(database, monkeypatch):

@@ -9,6 +9,7 @@ from recognition.surfaces.distance import FieldStack
 from recognition.surfaces.mesh_model import MeshModel
 from recognition.surfaces.registration.contact_pairs import (
     PAIR_SPACING_M,
+    contact_costs,
     pair_features,
     pair_poses,
     pair_search,
@@ -101,3 +102,24 @@ def test_the_search_refines_pair_poses_onto_the_surface(model):
     name, pose, error = found[0]
     assert name == "blob" and error < 0.02e-3
     assert np.linalg.norm(pose[:3, :3] @ p + pose[:3, 3] - model.vertices[i]) < 0.5e-3
+
+
+def test_a_touch_that_met_nothing_costs_a_pose_that_puts_the_surface_across_it(model):
+    T = _truth(3)
+    Ti = np.linalg.inv(T)
+    stack = FieldStack.of([model.distance_field])
+    points = model.vertices[::997] @ Ti[:3, :3].T + Ti[:3, 3]  # on the surface at T
+    R, t = T[None, :3, :3], T[None, :3, 3]
+    threshold = 0.1e-3
+    alone = contact_costs(stack, 0, points, [], R, t, threshold)
+    assert alone[0] < 0.01 * threshold**2
+    # a ray from outside straight through the body, and one that passes it by
+    normal = Ti[:3, :3] @ model.normals[0]
+    outside = Ti[:3, :3] @ (model.vertices[0] + 0.01 * model.normals[0]) + Ti[:3, 3]
+    through = (outside, -normal, 0.02)
+    past = (outside, normal, 0.02)
+    crossed = contact_costs(stack, 0, points, [through], R, t, threshold)
+    cleared = contact_costs(stack, 0, points, [past], R, t, threshold)
+    # the crossing counts as one point a full threshold off, among len(points) + 1
+    assert crossed[0] == pytest.approx((alone[0] * len(points) + threshold**2) / (len(points) + 1))
+    assert cleared[0] == pytest.approx(alone[0] * len(points) / (len(points) + 1))

@@ -15,7 +15,8 @@ pair's midpoint onto the model pair's. Where p's curvatures fit many places of a
 (a nearly spherical body, a flat face), the curves alone leave its pose free, but a touch
 away from p names the few places and turns that fit both: this is how a broader search
 (:meth:`~recognition.surfaces.database.ModelDatabase.broaden`) finds poses that the
-curvature lookup at p never proposed.
+curvature lookup at p never proposed. A touch that met nothing counts too: a pose that
+puts the surface across its approach cannot be the truth (:func:`contact_costs`).
 
 The model side is sampled at one vertex per cubic cell of ``PAIR_SPACING_M``; the
 tolerances cover that sampling (a vertex lies up to a cell's diagonal from the true point,
@@ -39,7 +40,9 @@ from recognition.surfaces.registration.fast import fit_on_fields
 __all__ = [
     "DISTANCE_TOLERANCE_M",
     "FEATURE_TOLERANCE",
+    "MISS_STEP_M",
     "PAIR_SPACING_M",
+    "contact_costs",
     "pair_features",
     "pair_poses",
     "pair_search",
@@ -62,6 +65,8 @@ SCORE_POINTS = 12
 N_REFINED = 16
 #: ... and this many distinct ones returned.
 N_KEPT = 8
+#: A touch that met nothing is read along its approach every this many metres.
+MISS_STEP_M = 1.0e-3
 #: Gauss-Newton steps of the refinement.
 ITERATIONS = 10
 #: Anchor vertices processed together (bounds the memory of the distance block).
@@ -142,6 +147,36 @@ def pair_poses(
     return np.concatenate(rotations), np.concatenate(translations)
 
 
+def contact_costs(
+    stack: FieldStack,
+    field: int,
+    points: Array,
+    misses: Sequence[tuple[Array, Array, float]],
+    R: Array,
+    t: Array,
+    threshold_m: float,
+) -> Array:
+    """The cost of each pose R (B, 3, 3), t (B, 3) (model from data) of the model whose
+    field is ``field`` of ``stack``: the mean, over the ``points`` (n, 3) and the
+    ``misses`` (start, unit direction, travel in metres: touches that met nothing, data
+    frame), of a point's squared distance from the surface and a miss's squared depth
+    to which the posed surface reaches across its approach (read every ``MISS_STEP_M``;
+    0 when it stays clear), each counted at most ``threshold_m`` squared. (B,)"""
+    which = np.full(len(R), field)
+    values = stack(points @ R.transpose(0, 2, 1) + t[:, None, :], which)
+    squares = [np.minimum(values * values, threshold_m**2)]
+    if len(misses):
+        rays = [
+            np.asarray(start, float) + np.arange(0.0, travel, MISS_STEP_M)[:, None] * direction
+            for start, direction, travel in misses
+        ]
+        along = stack(np.concatenate(rays) @ R.transpose(0, 2, 1) + t[:, None, :], which)
+        starts = np.cumsum([0] + [len(r) for r in rays[:-1]])
+        depth = np.maximum(-np.minimum.reduceat(along, starts, axis=1), 0.0)
+        squares.append(np.minimum(depth * depth, threshold_m**2))
+    return np.mean(np.concatenate(squares, axis=1), axis=1)
+
+
 def pair_search(
     models: Sequence[MeshModel],
     stack: FieldStack,
@@ -153,13 +188,15 @@ def pair_search(
     touch_normals: Array,
     threshold_m: float,
     seed: int = 0,
+    misses: Sequence[tuple[Array, Array, float]] = (),
 ) -> list[tuple[str, Array, float]]:
     """Poses of ``models`` (fields ``which_field`` of ``stack``) that fit the curves'
     points (n, 3) and the ``touches`` (k, 3), started from every model pair matching p
     (``point``, outward ``normal``) and a touch with its sensed outward normal
     (``touch_normals`` (k, 3); rows with NaN are not paired): scored on the fields at the
     touches and ``SCORE_POINTS`` of the curves' points (each point's squared distance
-    counted at most ``threshold_m`` squared), the best ``N_REFINED`` of each model
+    counted at most ``threshold_m`` squared, and each of the ``misses`` as well,
+    :func:`contact_costs`), the best ``N_REFINED`` of each model
     refined by Gauss-Newton on all the points (the touches never clipped), ``N_KEPT``
     distinct ones kept. Returns (model name,
     T_model_from_data (4, 4), mean distance of the curves' points from the model, each
@@ -179,8 +216,7 @@ def pair_search(
         if len(R) > MAX_SCORED:
             pick = np.sort(rng.choice(len(R), size=MAX_SCORED, replace=False))
             R, t = R[pick], t[pick]
-        values = stack(scoring @ R.transpose(0, 2, 1) + t[:, None, :], np.full(len(R), field))
-        cost = np.mean(np.minimum(values * values, threshold_m**2), axis=1)
+        cost = contact_costs(stack, field, scoring, misses, R, t, threshold_m)
         best = np.argsort(cost, kind="stable")[:N_REFINED]
         R, t, _, _ = fit_on_fields(
             stack,
