@@ -12,10 +12,13 @@ poses the first search never proposed, but which fit all the contact as well (or
 the hypotheses may all be wrong and still explain the contact), compete before an answer
 is called sure or given. After a touch that met nothing, or while no hypothesis explains
 the contact, the next touch is planned near the contact made (``LOST_WITHIN_M``), where
-the object surely is, when a touch there can tell the hypotheses apart. It stops once the
-belief's confidence (:attr:`Belief.confidence`) reaches ``confidence``, the touches are
-spent, or no allowed touch can tell the hypotheses apart. A belief that is sure after the
-curves makes no touch.
+the object surely is, when a touch there can tell the hypotheses apart. A belief that the
+broader search before a touch made sure is tested by that touch (planned with "none of
+these" counted ``MAX_NONE_WEIGHT`` probable among its outcomes): the search chose the
+poses that fit the contact best, and a pose so chosen can fit what it was chosen on and
+nothing else. It stops once a touch leaves the belief's confidence (:attr:`Belief.
+confidence`) at ``confidence`` or above, the touches are spent, or no allowed touch can
+tell the hypotheses apart. A belief that is sure after the curves makes no touch.
 """
 
 from __future__ import annotations
@@ -30,7 +33,7 @@ from numpy.typing import NDArray
 from recognition.errors import InvalidArgument
 from recognition.surfaces.belief import Belief
 from recognition.surfaces.database import ModelDatabase
-from recognition.surfaces.touch_planning import TouchLimits, TouchPlan
+from recognition.surfaces.touch_planning import MAX_NONE_WEIGHT, TouchLimits, TouchPlan
 
 __all__ = [
     "BROADEN_AT",
@@ -191,19 +194,19 @@ def verify(
             stop = "sure"
             break
         start = time.perf_counter()
+        doubt = 0.0
         if belief.unexplained >= BROADEN_AT:
             belief = database.broaden(belief)
             broaden_s += time.perf_counter() - start
-            if belief.confidence >= confidence:
-                stop = "sure"
-                break
+            if belief.confidence >= confidence:  # made sure by the search: a touch tests it
+                doubt = MAX_NONE_WEIGHT
         plan = None
         if missed or belief.unexplained >= BROADEN_AT:
             plan = database.plan_touch(
-                belief, limits, seed=seed + k, avoid=avoid, within_m=LOST_WITHIN_M
+                belief, limits, seed=seed + k, avoid=avoid, within_m=LOST_WITHIN_M, doubt=doubt
             )
         if plan is None:  # not lost, or no touch near the contact tells anything
-            plan = database.plan_touch(belief, limits, seed=seed + k, avoid=avoid)
+            plan = database.plan_touch(belief, limits, seed=seed + k, avoid=avoid, doubt=doubt)
         planned = time.perf_counter() - start
         if plan is None:
             stop = "no informative touch"

@@ -82,7 +82,7 @@ class BeliefConfig:
     explore_steps_m: tuple[float, ...] = (2.0e-3, 4.0e-3, 7.0e-3)
     prior_rotation_rad: float = 0.2
     prior_translation_m: float = 0.01
-    touch_window_m: float = 10.0e-3
+    touch_window_m: float = 16.0e-3
 
     def drift_reach_m(self, location_sd_m: float) -> float:
         """How far (metres) a refinement may move p of a hypothesis whose location is

@@ -374,9 +374,11 @@ class ModelDatabase:
         seed: int = 0,
         avoid: ArrayLike | None = None,
         within_m: float | None = None,
+        doubt: float = 0.0,
     ) -> TouchPlan | None:
         """The next touch of greatest expected information gain, none near the points
-        ``avoid`` (k, 3), with ``within_m`` near the contact made when it can
+        ``avoid`` (k, 3), with ``within_m`` near the contact made when it can, "none of
+        these" at least ``doubt`` probable among its outcomes
         (:func:`recognition.surfaces.touch_planning.plan_touch`), or None."""
         from recognition.surfaces.touch_planning import plan_touch
 
@@ -389,6 +391,7 @@ class ModelDatabase:
             seed=seed,
             avoid=avoid,
             within_m=within_m,
+            doubt=doubt,
         )
 
     def _checked_selection(

@@ -88,7 +88,10 @@ class TouchLimits:
     standoff_m : float
         The approach starts this far outside the predicted contact.
     travel_m : float
-        ... and searches this far beyond it.
+        ... and searches this far beyond it: hypotheses a few millimetres off disagree
+        by as much about where a surface 20-30 mm from p lies, and a touch that meets the
+        object, wherever along its approach, informs every later search where a miss
+        pulls no pose.
     min_separation_m : float
         Least distance of a touch from contact already made.
     candidates : int
@@ -111,7 +114,7 @@ class TouchLimits:
     max_tilt_rad: float = float(np.deg2rad(50.0))
     min_height_m: float = -np.inf
     standoff_m: float = 4.0e-3
-    travel_m: float = 6.0e-3
+    travel_m: float = 12.0e-3
     min_separation_m: float = 3.0e-3
     candidates: int = 1200
     scored: int = 300
@@ -342,6 +345,7 @@ def plan_touch(
     seed: int = 0,
     avoid: ArrayLike | None = None,
     within_m: float | None = None,
+    doubt: float = 0.0,
 ) -> TouchPlan | None:
     """The touch of greatest expected information gain (module docstring), or None when
     no candidate is allowed or none can tell the hypotheses apart.
@@ -351,8 +355,12 @@ def plan_touch(
     or of the points ``avoid`` (k, 3) (touches that gave no reading). With
     ``within_m``, only candidates within that distance of contact made are considered
     while there are any: where the hypotheses may all be wrong, the surface near the
-    data is where a touch is sure to meet the object. Same belief, seed, ``avoid`` and
-    ``within_m``, same plan.
+    data is where a touch is sure to meet the object. ``doubt``: "none of these" counts
+    at least this probable among the outcomes (a belief that a search, not a touch, made
+    sure is tested by a touch first: the search chose the poses that fit the contact
+    best, and a touch that the answer predicts sharply tells whether it also fits contact
+    it has not seen). Same belief, seed, ``avoid``, ``within_m`` and ``doubt``, same
+    plan.
     """
     if not belief.hypotheses:
         return None
@@ -396,7 +404,7 @@ def plan_touch(
     others = predicted_depths(stack, which[1:], poses[1:], starts, directions, limits.depth_m)
     depths = np.concatenate([own[None, keep], others])
     sigma = belief.noise.point_sigma_m(belief.sensor_m)
-    none = min(belief.unexplained, MAX_NONE_WEIGHT)
+    none = max(min(belief.unexplained, MAX_NONE_WEIGHT), doubt)
     gain = information_gain(depths, (1 - none) * weights, sigma, none, limits.depth_m)
     gain = without_edges(gain, depths, weights)
     k = int(np.argmax(gain))

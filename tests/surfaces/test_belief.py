@@ -25,7 +25,12 @@ from recognition.surfaces.noise_model import huber
 from recognition.surfaces.registration import ALIGNED_SEARCH, FastConfig, data_geometry
 from recognition.surfaces.registration.exact import smooth_normals
 from recognition.surfaces.registration.fast import register_fast
-from recognition.surfaces.touch_planning import information_gain, predicted_depths, without_edges
+from recognition.surfaces.touch_planning import (
+    MAX_NONE_WEIGHT,
+    information_gain,
+    predicted_depths,
+    without_edges,
+)
 from recognition.synthetic import mesh_data_curves, ray_contact, sensed_normal
 
 
@@ -295,6 +300,31 @@ def test_a_last_touch_that_leaves_the_belief_unsure_has_a_broader_search_after_i
     assert done.steps[0].confidence < 1.0  # and left the belief short of sure
     assert done.steps[0].belief.broadened is None
     assert done.belief.broadened == 1  # not sure after it: searched again
+
+
+def test_a_belief_a_search_made_sure_is_tested_by_a_touch(database, monkeypatch):
+    synthetic = _curves(database["blob"], 2500, seed=1, noise=0.005e-3)
+    sure = database.recognize(synthetic.curves, models=["blob"]).belief
+    limits = _limits(synthetic)
+    assert sure.confidence >= 0.99
+    # sure, nothing tells its hypotheses apart; doubted, a touch tests the answer
+    assert database.plan_touch(sure, limits, seed=1) is None
+    doubted = database.plan_touch(sure, limits, seed=1, doubt=MAX_NONE_WEIGHT)
+    assert doubted is not None and doubted.information_nats > 0.1
+    # a belief that nothing explains, which the broader search before the first touch
+    # makes sure
+    lost = replace(
+        sure,
+        hypotheses=tuple(replace(h, posterior=0.01 * h.posterior) for h in sure.hypotheses),
+        unexplained=0.99,
+    )
+    assert lost.confidence < 0.5
+    monkeypatch.setattr(
+        type(database), "broaden", lambda self, belief: belief if belief.touches else sure
+    )
+    done = verify(database, lost, lambda plan: plan.point, limits, max_touches=3)
+    assert len(done.steps) == 1  # one touch, the one that tests the search's answer
+    assert done.stop == "sure" and done.steps[0].confidence >= 0.99
 
 
 def test_none_of_these_spreads_a_touch_over_the_planned_approach():
