@@ -15,7 +15,7 @@ the contact, the next touch is planned near the contact made (``LOST_WITHIN_M``)
 the object surely is, when a touch there can tell the hypotheses apart. A belief that the
 broader search before a touch made sure is tested by that touch (planned with "none of
 these" counted ``MAX_NONE_WEIGHT`` probable among its outcomes): the search chose the
-poses that fit the contact best, and a pose so chosen can fit what it was chosen on and
+poses that fit the contact best, and a pose so chosen may fit what it was chosen on and
 nothing else. It stops once a touch leaves the belief's confidence (:attr:`Belief.
 confidence`) at ``confidence`` or above, the touches are spent, or no allowed touch can
 tell the hypotheses apart. A belief that is sure after the curves makes no touch.
