@@ -105,7 +105,7 @@ def truth_fit(
             best.T_model_from_data,
             models[true_model],
             T_model_from_data,
-            APART_SDS * float(np.hypot(belief.sensor_m, belief.noise.model_mismatch_m)),
+            APART_SDS * belief.noise.point_sigma_m(belief.sensor_m),
         ),
     }
 
