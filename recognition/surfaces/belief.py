@@ -255,21 +255,38 @@ class Belief:
         known = [(h.model, h.T_model_from_data, h.touch_evidence) for h in self.hypotheses]
         usable = [(n, np.asarray(T, float), 0.0) for n, T in poses if n in models]
         if usable and len(self.windows):
-            usable = self._in_turn(usable, models)
+            likeliest = max([h.log_likelihood for h in self.hypotheses], default=-np.inf)
+            usable = self._in_turn(usable, models, likeliest)
         return replace(self._rescored([*known, *usable], models), broadened=self.touches)
 
     def _in_turn(
-        self, poses: Sequence[tuple[str, Array, float]], models: Mapping[str, MeshModel]
+        self,
+        poses: Sequence[tuple[str, Array, float]],
+        models: Mapping[str, MeshModel],
+        likeliest: float = -np.inf,
     ) -> list[tuple[str, Array, float]]:
         """New poses ``(model, T_model_from_data, _)`` with their touches' evidence as
         each touch would have been predicted when it was made: touch i at the pose
         refined on the curves and the touches before it, with that fit's uncertainty
         (the chain rule, p(t_1 .. t_k) = prod_i p(t_i | curves, t_<i)). Each pose ends
-        refined on the contact before the last touch."""
+        refined on the contact before the last touch. A pose that cannot come within
+        the posterior floor (:attr:`BeliefConfig.min_posterior`) of ``likeliest`` (the
+        log-likelihood of a hypothesis that stays), even if it predicted each touch still
+        to count perfectly (:meth:`_touch_bounds`), is left out as soon as that is so:
+        it would be dropped."""
         n = self.n_curve_points
         current = [poses[k] for k in _fitted_order([name for name, _, _ in poses])]
         total = np.zeros(len(current))
+        floor = -np.inf
+        if self.config.min_posterior > 0:
+            floor = likeliest + np.log(self.config.min_posterior)
+        still = np.cumsum(self._touch_bounds()[::-1])[::-1]  # at most, from touch i on
         for i in range(len(self.windows)):
+            alive = total + still[i] >= floor
+            current = [pose for pose, ok in zip(current, alive, strict=True) if ok]
+            total = total[alive]
+            if not current:
+                return []
             before = replace(
                 self,
                 points=self.points[: n + i],
@@ -286,7 +303,11 @@ class Belief:
             )
             total += np.array(upto._predicted(fitted, models, upto._whitening(), i))
             current = [(h.model, h.T_model_from_data, 0.0) for h in fitted]
-        return [(name, T, float(e)) for (name, T, _), e in zip(current, total, strict=True)]
+        return [
+            (name, T, float(e))
+            for (name, T, _), e in zip(current, total, strict=True)
+            if e >= floor
+        ]
 
     def _rescored(
         self,
@@ -311,7 +332,10 @@ class Belief:
             found = self._recounted(hypotheses, found, reach, models, whitening)
         starts = self._explored(found)
         if starts and len(self.windows):
-            starts = self._in_turn(self._new_minima(starts, found, models, whitening), models)
+            likeliest = max(h.log_likelihood for h in found)
+            starts = self._in_turn(
+                self._new_minima(starts, found, models, whitening), models, likeliest
+            )
         found += self._fitted(starts, models, whitening)
         found = _merged(found, self.point)
         logs = np.array([h.log_likelihood for h in found])
@@ -355,6 +379,17 @@ class Belief:
         if not far:
             return found
         return kept + self._fitted(self._in_turn(far, models), models, whitening)
+
+    def _touch_bounds(self) -> Array:
+        """The most each touch that met the surface can add to a hypothesis's log ratio
+        against "none of these" (:func:`~recognition.surfaces.touch_evidence.
+        predicted_evidence`), (k,): its point predicted exactly, -log(sqrt(2 pi) L_ii /
+        w_i), and its sensed normal, -log det(C) / 2 <= -2 log sigma_n."""
+        n = self.n_curve_points
+        spread = 1.0 / np.diag(self._whitening())[n:]
+        normal = -2.0 * np.log(self.noise.normal_sigma_rad())
+        sensed = np.all(np.isfinite(self.normals), axis=1)
+        return -np.log(np.sqrt(2.0 * np.pi) * spread / self.windows) + normal * sensed
 
     def _whitening(self) -> Array:
         """The inverse of the lower Cholesky factor of Sigma over :attr:`points`."""

@@ -167,16 +167,24 @@ def miss_evidence(
     travel in metres; data frame), under the pose R, t of the model whose distances
     ``distance`` gives: a ray that the posed surface crosses within the travel costs
     Huber's loss of its deepest point inside, in noise levels ``sigma_m`` (a surface the
-    ray just grazes costs little, one it runs deep into costs much)."""
+    ray just grazes costs little, one it runs deep into costs much). A ray that meets no
+    face, or first enters the surface beyond its travel (it starts outside), is clear of
+    it and is not sampled."""
     penalty = 0.0
     for start, direction, travel in misses:
-        steps = np.arange(0.0, travel + 0.05e-3, 0.1e-3)
+        steps = np.arange(0.0, travel + 0.5 * MISS_STEP_M, MISS_STEP_M)
+        face, hit = distance.first_hits(R @ start + t, R @ direction)
+        entering = face[0] >= 0 and float(distance.normals_of(face)[0] @ (R @ direction)) < 0
+        if face[0] < 0 or (entering and hit[0] > steps[-1]):
+            continue
         deepest = _deepest(distance, (start + steps[:, None] * direction) @ R.T + t, steps)
         if deepest < 0:
             penalty -= float(huber(np.array([deepest / sigma_m]), huber_k)[0])
     return penalty
 
 
+#: :func:`miss_evidence` samples a ray that meets the surface every this many metres.
+MISS_STEP_M = 0.1e-3
 #: :func:`_deepest` reads every this many samples of a ray first.
 COARSE_EVERY = 10
 

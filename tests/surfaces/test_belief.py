@@ -646,3 +646,59 @@ def test_a_hypothesis_a_touch_moves_beyond_its_uncertainty_counts_the_touches_ag
     )
     assert moved.best.touch_evidence == pytest.approx(evidence, abs=1e-9)
     assert kept.best.touch_evidence != pytest.approx(evidence, abs=1e-3)
+
+
+def test_no_pose_predicts_a_touch_better_than_its_bound(database):
+    # a touch adds at most -log(sqrt(2 pi) L_ii / w_i) for its point and -2 log sigma_n
+    # for its sensed normal to a hypothesis's log ratio against "none of these": the
+    # poses along the loose blob's valley, near and far, predict it no better
+    found, touched = _loose_blob_and_two_touches(database)
+    model = database["blob"]
+    T = found.best.T_model_from_data
+    _, _, face = model.distance.signed_closest(touched[:1] @ T[:3, :3].T + T[:3, 3])
+    normal = model.distance.normals_of(face) @ T[:3, :3]  # data frame
+    once = database.update(found, touched[:1], normals=normal)
+    bound = once._touch_bounds()
+    assert bound.shape == (1,) and np.isfinite(bound[0])
+    _, loose = found.loose_motions(found.best)[0]
+    posed = [
+        replace(found.best, T_model_from_data=found.best.moved(s * loose))
+        for s in (-6e-3, -2e-3, -0.5e-3, 0.0, 0.5e-3, 2e-3, 6e-3)
+    ]
+    scores = once._predicted(posed, database.models, once._whitening(), 0)
+    assert max(scores) <= bound[0]
+    assert max(scores) > bound[0] - 10.0  # and the best comes near it
+
+
+def test_poses_that_cannot_win_are_left_out_before_all_their_touches_are_counted(
+    database, monkeypatch
+):
+    # poses added after touches keep the evidence that counting all their touches gives,
+    # unless it leaves them below the posterior floor of the likeliest hypothesis's
+    # log-likelihood; those are left out, and as soon as the touches still to count,
+    # each predicted as well as it can be (the bounds), cannot lift them over it: with
+    # the floor beyond every bound, no pose is even fitted. Poses along the loose blob's
+    # valley and turned about p
+    found, touched = _loose_blob_and_two_touches(database)
+    made = database.update(database.update(found, touched[:1]), touched[1:])
+    best = made.best
+    _, loose = made.loose_motions(best)[0]
+    p = best.location
+    poses = [("blob", best.moved(s * loose), 0.0) for s in (-3e-3, 3e-3)]
+    for angle in np.deg2rad([20.0, 45.0, 90.0]):
+        turn = pose_matrix(rotation_about(0, angle), p - rotation_about(0, angle) @ p)
+        poses.append(("blob", turn @ best.T_model_from_data, 0.0))
+    every = made._in_turn(poses, database.models)
+    evidence = sorted(e for _, _, e in every)
+    gap = -np.log(made.config.min_posterior)
+    for floor in (evidence[0] - 1.0, 0.5 * (evidence[1] + evidence[2]), evidence[-1] + 1.0):
+        kept = made._in_turn(poses, database.models, floor + gap)
+        expected = [(name, T, e) for name, T, e in every if e >= floor]
+        assert len(kept) == len(expected)
+        for (_, T, e), (_, T_all, e_all) in zip(kept, expected, strict=True):
+            np.testing.assert_array_equal(T, T_all)
+            assert e == e_all
+    fitted = []
+    monkeypatch.setattr(Belief, "_fitted", lambda *args: fitted.append(args) or [])
+    assert made._in_turn(poses, database.models, made._touch_bounds().sum() + gap + 1e-6) == []
+    assert not fitted

@@ -85,3 +85,35 @@ def test_a_missed_touch_reads_only_the_ray_points_that_can_be_inside():
             outside += 1
             assert deepest >= 0
     assert inside >= 10 and outside >= 10
+
+
+def test_a_missed_touch_costs_what_every_point_of_its_ray_says():
+    """A missed touch's cost is Huber's loss of the deepest of all its ray's points inside
+    the posed model (none inside: nothing), though a ray clear of the surface is cast, not
+    sampled (rays from outside and inside a blob at random poses, through it, grazing it
+    and clear of it)."""
+    from scipy.spatial.transform import Rotation
+    from testing_meshes import blob
+
+    from recognition.surfaces.mesh_model import MeshModel
+    from recognition.surfaces.touch_evidence import MISS_STEP_M, miss_evidence
+
+    distance = MeshModel("blob", blob()).distance
+    rng = np.random.default_rng(7)
+    sigma, k = 0.1e-3, 3.0
+    costly = free = 0
+    for _ in range(80):
+        R = Rotation.from_rotvec(rng.normal(size=3)).as_matrix()
+        t = rng.normal(size=3) * 0.005
+        start = rng.normal(size=3) * 0.04
+        aim = rng.normal(size=3) * 0.02
+        direction = (aim - start) / np.linalg.norm(aim - start)
+        travel = rng.uniform(0.005, 0.06)
+        steps = np.arange(0.0, travel + 0.5 * MISS_STEP_M, MISS_STEP_M)
+        every = float(distance.signed((start + steps[:, None] * direction) @ R.T + t).min())
+        expected = -huber(np.array([every / sigma]), k)[0] if every < 0 else 0.0
+        cost = miss_evidence(distance, R, t, [(start, direction, travel)], sigma, k)
+        assert cost == pytest.approx(expected, rel=1e-12, abs=0.0)
+        costly += cost < 0
+        free += cost == 0
+    assert costly >= 10 and free >= 10
