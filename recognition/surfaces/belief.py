@@ -64,6 +64,7 @@ from recognition.surfaces.noise_model import NoiseModel, huber
 from recognition.surfaces.registration.ambiguity import distinct_poses
 from recognition.surfaces.registration.exact import smooth_normals
 from recognition.surfaces.touch_evidence import (
+    evidence_bounds,
     miss_evidence,
     predicted_evidence,
     sensed_normals,
@@ -277,16 +278,15 @@ class Belief:
         n = self.n_curve_points
         current = [poses[k] for k in _fitted_order([name for name, _, _ in poses])]
         total = np.zeros(len(current))
-        floor = -np.inf
-        if self.config.min_posterior > 0:
+        with np.errstate(divide="ignore"):  # min_posterior 0: no floor
             floor = likeliest + np.log(self.config.min_posterior)
-        still = np.cumsum(self._touch_bounds()[::-1])[::-1]  # at most, from touch i on
-        for i in range(len(self.windows)):
+        still = np.r_[np.cumsum(self._touch_bounds()[::-1])[::-1], 0.0]  # touch i on, at most
+        for i in range(len(self.windows) + 1):
             alive = total + still[i] >= floor
             current = [pose for pose, ok in zip(current, alive, strict=True) if ok]
             total = total[alive]
-            if not current:
-                return []
+            if not current or i == len(self.windows):
+                break
             before = replace(
                 self,
                 points=self.points[: n + i],
@@ -303,11 +303,7 @@ class Belief:
             )
             total += np.array(upto._predicted(fitted, models, upto._whitening(), i))
             current = [(h.model, h.T_model_from_data, 0.0) for h in fitted]
-        return [
-            (name, T, float(e))
-            for (name, T, _), e in zip(current, total, strict=True)
-            if e >= floor
-        ]
+        return [(name, T, float(e)) for (name, T, _), e in zip(current, total, strict=True)]
 
     def _rescored(
         self,
@@ -382,14 +378,10 @@ class Belief:
 
     def _touch_bounds(self) -> Array:
         """The most each touch that met the surface can add to a hypothesis's log ratio
-        against "none of these" (:func:`~recognition.surfaces.touch_evidence.
-        predicted_evidence`), (k,): its point predicted exactly, -log(sqrt(2 pi) L_ii /
-        w_i), and its sensed normal, -log det(C) / 2 <= -2 log sigma_n."""
-        n = self.n_curve_points
-        spread = 1.0 / np.diag(self._whitening())[n:]
-        normal = -2.0 * np.log(self.noise.normal_sigma_rad())
-        sensed = np.all(np.isfinite(self.normals), axis=1)
-        return -np.log(np.sqrt(2.0 * np.pi) * spread / self.windows) + normal * sensed
+        against "none of these", (k,) (:func:`~recognition.surfaces.touch_evidence.
+        evidence_bounds`)."""
+        spread = 1.0 / np.diag(self._whitening())[self.n_curve_points :]
+        return evidence_bounds(spread, self.windows, self.normals, self.noise.normal_sigma_rad())
 
     def _whitening(self) -> Array:
         """The inverse of the lower Cholesky factor of Sigma over :attr:`points`."""

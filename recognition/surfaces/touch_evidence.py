@@ -50,6 +50,7 @@ from recognition.surfaces.noise_model import NoiseModel, huber
 from recognition.surfaces.registration.exact import smooth_normals
 
 __all__ = [
+    "evidence_bounds",
     "miss_evidence",
     "normal_evidence",
     "point_evidence",
@@ -104,6 +105,15 @@ def normal_evidence(
         z = float(np.sqrt(d @ np.linalg.solve(C, d)))
         total += -float(huber(np.array([z]), huber_k)[0]) - 0.5 * float(np.log(np.linalg.det(C)))
     return total
+
+
+def evidence_bounds(spread: Array, windows: Array, normals: Array, sigma_rad: float) -> Array:
+    """The most each of k touches can add to a hypothesis's log ratio (module docstring),
+    (k,): its point predicted exactly, -log(sqrt(2 pi) L_ii / w_i) (``spread`` (k,) L_ii,
+    ``windows`` (k,) w_i), and a sensed normal (rows of NaN in ``normals`` (k, 3): none)
+    as predicted, -log det(C) / 2 <= -2 log ``sigma_rad`` (C >= sigma_n^2 I)."""
+    sensed = np.all(np.isfinite(normals), axis=1)
+    return -np.log(np.sqrt(2.0 * np.pi) * spread / windows) - 2.0 * np.log(sigma_rad) * sensed
 
 
 def predicted_evidence(
