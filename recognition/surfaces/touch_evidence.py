@@ -183,8 +183,9 @@ def miss_evidence(
     penalty = 0.0
     for start, direction, travel in misses:
         steps = np.arange(0.0, travel + 0.5 * MISS_STEP_M, MISS_STEP_M)
-        face, hit = distance.first_hits(R @ start + t, R @ direction)
-        entering = face[0] >= 0 and float(distance.normals_of(face)[0] @ (R @ direction)) < 0
+        towards = R @ direction
+        face, hit = distance.first_hits(R @ start + t, towards)
+        entering = face[0] >= 0 and float(distance.normals_of(face)[0] @ towards) < 0
         if face[0] < 0 or (entering and hit[0] > steps[-1]):
             continue
         deepest = _deepest(distance, (start + steps[:, None] * direction) @ R.T + t, steps)
