@@ -78,3 +78,36 @@ def test_curves_on_a_sphere_report_their_pose_free() -> None:
     own = result.registrations["sphere"]
     assert result.name == "sphere" and own.free_motions == 3 and own.ambiguous
     assert own.error_m < 0.02e-3
+
+
+def test_distinct_poses_keeps_the_best_of_each_group_in_order() -> None:
+    # the greedy choice, whatever the ties: each kept pose is the least error among the
+    # poses no better kept pose stands for (p within the radius, turned less than the
+    # angle), and the kept ones stand for one another never
+    from scipy.spatial.transform import Rotation
+
+    from recognition.surfaces.registration.ambiguity import DISTINCT_ANGLE_RAD, DISTINCT_RADIUS_M
+
+    rng = np.random.default_rng(3)
+    for trial in range(40):
+        k = int(rng.integers(1, 400))
+        base = Rotation.random(4, random_state=trial).as_matrix()
+        R = (
+            base[rng.integers(0, 4, k)]
+            @ Rotation.from_rotvec(rng.normal(size=(k, 3)) * 0.1).as_matrix()
+        )
+        t = rng.normal(size=(k, 3)) * 2e-3
+        errors = np.round(rng.random(k), 1)  # many ties
+        point = rng.normal(size=3) * 0.01
+        location = R @ point + t
+        same = (np.linalg.norm(location[:, None] - location[None], axis=-1) < DISTINCT_RADIUS_M) & (
+            np.einsum("aij,bij->ab", R, R) > 1 + 2 * np.cos(DISTINCT_ANGLE_RAD)
+        )
+        n_keep = int(rng.integers(1, 30))
+        kept = distinct_poses(R, t, errors, point, n_keep)
+        alive = np.ones(k, bool)
+        for i in kept:
+            assert alive[i] and errors[i] == errors[alive].min()
+            assert i == np.flatnonzero(alive & (errors == errors[i]))[0]  # ties: first given
+            alive &= ~same[i]
+        assert len(kept) == n_keep or not alive.any()

@@ -43,17 +43,14 @@ def distinct_poses(
     while rotated less than ``angle`` from it; best first."""
     order = np.argsort(errors, kind="stable")
     R, location = R[order], R[order] @ point + t[order]
-    near = np.linalg.norm(location[:, None] - location[None], axis=-1) < radius
     cos_limit = 1 + 2 * np.cos(angle)
-    same = near & (np.einsum("aij,bij->ab", R, R) > cos_limit)
     alive = np.ones(len(order), bool)
-    kept = []
-    for i in range(len(order)):
-        if alive[i]:
-            kept.append(i)
-            if len(kept) == n_keep:
-                break
-            alive &= ~same[i]
+    kept: list[int] = []
+    while alive.any() and len(kept) < n_keep:
+        i = int(np.argmax(alive))  # the best pose still alive is kept
+        kept.append(i)
+        near = np.linalg.norm(location - location[i], axis=-1) < radius
+        alive &= ~(near & (np.einsum("bij,ij->b", R, R[i]) > cos_limit))
     return order[np.array(kept, dtype=np.int64)]
 
 
