@@ -111,3 +111,11 @@ def test_distinct_poses_keeps_the_best_of_each_group_in_order() -> None:
             assert i == np.flatnonzero(alive & (errors == errors[i]))[0]  # ties: first given
             alive &= ~same[i]
         assert len(kept) == n_keep or not alive.any()
+
+
+def test_distinct_poses_with_no_radius_or_angle_keeps_every_pose() -> None:
+    R = np.tile(np.eye(3), (3, 1, 1))
+    t = np.zeros((3, 3))
+    for radius, angle in ((0.0, 0.1), (1.0, 0.0)):
+        kept = distinct_poses(R, t, np.array([2.0, 1.0, 3.0]), np.zeros(3), 3, radius, angle)
+        np.testing.assert_array_equal(kept, [1, 0, 2])

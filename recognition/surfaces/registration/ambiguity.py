@@ -51,6 +51,7 @@ def distinct_poses(
         kept.append(i)
         near = np.linalg.norm(location - location[i], axis=-1) < radius
         alive &= ~(near & (np.einsum("bij,ij->b", R, R[i]) > cos_limit))
+        alive[i] = False  # (with a radius or an angle of 0 no pose stands for itself)
     return order[np.array(kept, dtype=np.int64)]
 
 
