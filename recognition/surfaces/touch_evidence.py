@@ -182,7 +182,7 @@ def miss_evidence(
     it and is not sampled."""
     penalty = 0.0
     for start, direction, travel in misses:
-        steps = np.arange(0.0, travel + 0.5 * MISS_STEP_M, MISS_STEP_M)
+        steps = np.arange(0.0, travel + 0.5 * RAY_SAMPLE_M, RAY_SAMPLE_M)
         towards = R @ direction
         face, hit = distance.first_hits(R @ start + t, towards)
         entering = face[0] >= 0 and float(distance.normals_of(face)[0] @ towards) < 0
@@ -194,8 +194,10 @@ def miss_evidence(
     return penalty
 
 
-#: :func:`miss_evidence` samples a ray that meets the surface every this many metres.
-MISS_STEP_M = 0.1e-3
+#: :func:`miss_evidence` samples a ray that meets the surface every this many metres, on
+#: the exact mesh (the pair search reads the distance fields more coarsely,
+#: :data:`~recognition.surfaces.registration.contact_pairs.MISS_STEP_M`).
+RAY_SAMPLE_M = 0.1e-3
 #: :func:`_deepest` reads every this many samples of a ray first.
 COARSE_EVERY = 10
 

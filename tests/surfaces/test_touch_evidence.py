@@ -96,7 +96,7 @@ def test_a_missed_touch_costs_what_every_point_of_its_ray_says():
     from testing_meshes import blob
 
     from recognition.surfaces.mesh_model import MeshModel
-    from recognition.surfaces.touch_evidence import MISS_STEP_M, miss_evidence
+    from recognition.surfaces.touch_evidence import RAY_SAMPLE_M, miss_evidence
 
     distance = MeshModel("blob", blob()).distance
     rng = np.random.default_rng(7)
@@ -109,7 +109,7 @@ def test_a_missed_touch_costs_what_every_point_of_its_ray_says():
         aim = rng.normal(size=3) * 0.02
         direction = (aim - start) / np.linalg.norm(aim - start)
         travel = rng.uniform(0.005, 0.06)
-        steps = np.arange(0.0, travel + 0.5 * MISS_STEP_M, MISS_STEP_M)
+        steps = np.arange(0.0, travel + 0.5 * RAY_SAMPLE_M, RAY_SAMPLE_M)
         every = float(distance.signed((start + steps[:, None] * direction) @ R.T + t).min())
         expected = -huber(np.array([every / sigma]), k)[0] if every < 0 else 0.0
         cost = miss_evidence(distance, R, t, [(start, direction, travel)], sigma, k)
