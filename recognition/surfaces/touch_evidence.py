@@ -43,7 +43,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from recognition.errors import InvalidArgument
-from recognition.rigid import point_to_plane_jacobian
+from recognition.rigid import cross, point_to_plane_jacobian
 from recognition.surfaces.distance import MeshDistance
 from recognition.surfaces.mesh_model import MeshModel
 from recognition.surfaces.noise_model import NoiseModel, huber
@@ -87,24 +87,24 @@ def normal_evidence(
     ``sensed`` (k, 3) unit normals in one frame (rows of NaN in ``sensed``: no normal
     sensed), ``turn_covariance`` (3, 3) the hypothesis's turn in that frame, radians^2."""
     known = np.all(np.isfinite(sensed), axis=1)
-    total = 0.0
-    for n, s in zip(predicted[known], sensed[known], strict=True):
-        # an orthonormal basis of n's tangent plane
-        helper = np.eye(3)[int(np.argmin(np.abs(n)))]
-        e1 = np.cross(n, helper)
-        e1 /= np.linalg.norm(e1)
-        B = np.stack([e1, np.cross(n, e1)])
-        cosine = float(np.clip(n @ s, -1.0, 1.0))
-        tilt = B @ s
-        size = float(np.linalg.norm(tilt))
-        # the tilt's direction; any one for a normal sensed opposite the predicted
-        d = np.arccos(cosine) * (tilt / size if size > 1e-15 else np.array([1.0, 0.0]))
-        skew = np.array([[0.0, -n[2], n[1]], [n[2], 0.0, -n[0]], [-n[1], n[0], 0.0]])
-        M = B @ skew
-        C = sigma_rad**2 * np.eye(2) + M @ turn_covariance @ M.T
-        z = float(np.sqrt(d @ np.linalg.solve(C, d)))
-        total += -float(huber(np.array([z]), huber_k)[0]) - 0.5 * float(np.log(np.linalg.det(C)))
-    return total
+    n, s = predicted[known], sensed[known]
+    if not len(n):
+        return 0.0
+    # an orthonormal basis e1, e2 = n x e1 of each n's tangent plane
+    e1 = cross(n, np.eye(3)[np.argmin(np.abs(n), axis=1)])
+    e1 /= np.sqrt(np.sum(e1 * e1, axis=1))[:, None]
+    e2 = cross(n, e1)
+    tilt = np.stack([np.sum(e1 * s, axis=1), np.sum(e2 * s, axis=1)], axis=1)
+    size = np.sqrt(np.sum(tilt * tilt, axis=1))[:, None]
+    # the tilt's direction; any one for a normal sensed opposite the predicted
+    along = np.where(size > 1e-15, tilt / np.maximum(size, 1e-300), [1.0, 0.0])
+    d = np.arccos(np.clip(np.sum(n * s, axis=1), -1.0, 1.0))[:, None] * along
+    M = np.stack([-e2, e1], axis=1)  # B [n]x (k, 2, 3): a turn w tilts n by w x n
+    C = sigma_rad**2 * np.eye(2) + M @ turn_covariance @ M.transpose(0, 2, 1)
+    a, b, c = C[:, 0, 0], C[:, 0, 1] + C[:, 1, 0], C[:, 1, 1]
+    det = a * c - C[:, 0, 1] * C[:, 1, 0]
+    z2 = (d[:, 0] ** 2 * c - d[:, 0] * d[:, 1] * b + d[:, 1] ** 2 * a) / det  # d^T C^-1 d
+    return float(np.sum(-huber(np.sqrt(np.maximum(z2, 0.0)), huber_k) - 0.5 * np.log(det)))
 
 
 def evidence_bounds(spread: Array, windows: Array, normals: Array, sigma_rad: float) -> Array:
