@@ -23,7 +23,14 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["build_cells", "closest_point", "closest_points", "face_bounds", "first_hits"]
+__all__ = [
+    "build_cells",
+    "closest_point",
+    "closest_points",
+    "face_bounds",
+    "first_hits",
+    "interpolated_normals",
+]
 
 #: How far outside a triangle, in barycentric coordinates, a ray still hits it.
 RAY_SLACK = 1e-10
@@ -491,3 +498,44 @@ def first_hits(
         face[n] = best_face
         distance[n] = best
     return face, distance
+
+
+@numba.njit(cache=True, nogil=True)
+def interpolated_normals(
+    vertices: Array, faces: IntArray, vertex_normals: Array, points: Array, face: IntArray
+) -> Array:  # pragma: no cover - compiled
+    """Unit normals (m, 3) at ``points`` (m, 3) on the faces ``face`` (m,): the
+    ``vertex_normals`` of each face's corners weighted by the point's barycentric
+    coordinates (Cramer's rule, each clipped to [0, 1]); a face without area (up to
+    ``FLAT``) weighs its corners alike."""
+    out = np.empty((points.shape[0], 3))
+    for n in range(points.shape[0]):
+        a, b, c = faces[face[n], 0], faces[face[n], 1], faces[face[n], 2]
+        d00 = d01 = d02 = d11 = d12 = 0.0
+        for k in range(3):
+            e0 = vertices[b, k] - vertices[a, k]
+            e1 = vertices[c, k] - vertices[a, k]
+            w = points[n, k] - vertices[a, k]
+            d00 += e0 * e0
+            d01 += e0 * e1
+            d02 += e0 * w
+            d11 += e1 * e1
+            d12 += e1 * w
+        det = d00 * d11 - d01 * d01
+        if det > FLAT * d00 * d11:
+            w2 = (d00 * d12 - d01 * d02) / det
+            w1 = (d11 * d02 - d01 * d12) / det
+            w0 = 1.0 - w1 - w2
+            w0, w1, w2 = min(max(w0, 0.0), 1.0), min(max(w1, 0.0), 1.0), min(max(w2, 0.0), 1.0)
+        else:
+            w0 = w1 = w2 = 1.0 / 3.0
+        size = 0.0
+        for k in range(3):
+            out[n, k] = (
+                w0 * vertex_normals[a, k] + w1 * vertex_normals[b, k] + w2 * vertex_normals[c, k]
+            )
+            size += out[n, k] ** 2
+        size = max(np.sqrt(size), 1e-12)
+        for k in range(3):
+            out[n, k] /= size
+    return out

@@ -248,3 +248,32 @@ def test_a_touch_by_ray_lands_on_the_surface_past_a_folded_sliver():
         point = ray_contact(distance, np.eye(4), start, direction, 0.01)
         assert point is not None
         assert distance.closest(point[None])[0][0] < 1e-8
+
+
+def test_normals_between_the_corners_are_weighed_by_the_barycentric_coordinates():
+    from recognition.surfaces.mesh_kernels import interpolated_normals
+
+    mesh = blob()
+    vertices, faces = np.asarray(mesh.vertices), np.asarray(mesh.faces, dtype=np.int64)
+    corner_normals = np.asarray(mesh.vertex_normals)
+    rng = np.random.default_rng(5)
+    face = rng.integers(len(faces), size=400)
+    weights = rng.dirichlet(np.ones(3), size=400)
+    weights[:50] = np.eye(3)[rng.integers(3, size=50)]  # at corners
+    points = np.einsum("nk,nki->ni", weights, vertices[faces[face]])
+    got = interpolated_normals(vertices, faces, corner_normals, points, face)
+    expected = np.einsum("nk,nki->ni", weights, corner_normals[faces[face]])
+    expected /= np.linalg.norm(expected, axis=1, keepdims=True)
+    np.testing.assert_allclose(got, expected, atol=1e-9)
+    # a point beside its face counts its nearest corners; a face without area, all alike
+    beside = vertices[faces[:1, 0]] + 5.0 * (vertices[faces[:1, 0]] - vertices[faces[:1, 1]])
+    n0 = corner_normals[faces[0, 0]]
+    np.testing.assert_allclose(
+        interpolated_normals(vertices, faces, corner_normals, beside, np.zeros(1, np.int64))[0],
+        n0 / np.linalg.norm(n0),
+        atol=1e-9,
+    )
+    flat = np.array([[0.0, 0, 0], [1, 0, 0], [2, 0, 0]])
+    tilted = np.array([[0.0, 0, 1], [1, 0, 0], [0, 1, 0]])
+    got = interpolated_normals(flat, np.array([[0, 1, 2]]), tilted, flat[:1], np.zeros(1, np.int64))
+    np.testing.assert_allclose(got[0], np.ones(3) / np.sqrt(3), atol=1e-12)

@@ -6,7 +6,6 @@ import time
 from dataclasses import replace
 
 import numpy as np
-import trimesh
 from numpy.typing import ArrayLike, NDArray
 
 from recognition.rigid import pose_matrix
@@ -175,10 +174,15 @@ def smooth_normals(model: MeshModel, points: Array, faces: NDArray[np.int64]) ->
     """Unit normals (k, 3) at ``points`` (k, 3) on ``faces`` (k,) of the model,
     interpolated from its vertex normals (on a faceted sphere they point at the centre,
     so that a turn about it stays free)."""
-    corners = model.faces[faces]
-    weights = trimesh.triangles.points_to_barycentric(model.vertices[corners], points)
-    normals = np.einsum("nk,nki->ni", np.clip(weights, 0.0, 1.0), model.normals[corners])
-    return normals / np.maximum(np.linalg.norm(normals, axis=1, keepdims=True), 1e-12)
+    from recognition.surfaces.mesh_kernels import interpolated_normals  # numba: when needed
+
+    return interpolated_normals(
+        model.vertices,
+        np.ascontiguousarray(model.faces, dtype=np.int64),
+        model.normals,
+        np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 3),
+        np.ascontiguousarray(faces, dtype=np.int64).reshape(-1),
+    )
 
 
 def with_exact_error(
