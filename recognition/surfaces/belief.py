@@ -61,7 +61,7 @@ from recognition.surfaces.data_curves import DataCurves
 from recognition.surfaces.hypothesis import Hypothesis, within_probability
 from recognition.surfaces.mesh_model import MeshModel
 from recognition.surfaces.noise_model import NoiseModel, huber
-from recognition.surfaces.registration.ambiguity import distinct_new_poses, distinct_poses
+from recognition.surfaces.registration.ambiguity import distinct_poses
 from recognition.surfaces.registration.exact import smooth_normals
 from recognition.surfaces.touch_evidence import (
     evidence_bounds,
@@ -250,13 +250,11 @@ class Belief:
         self, models: Mapping[str, MeshModel], poses: Sequence[tuple[str, Array]]
     ) -> Belief:
         """The belief with further candidate poses ``(model, T_model_from_data)`` (a
-        broader search's, best first; near-duplicates of a hypothesis or of a better pose
-        left out, :func:`distinct_new_poses`), refined and scored with its hypotheses on
-        all the contact; marked ``broadened`` with the touches it had. A new pose's
-        touches count as it would have predicted each in turn (:meth:`_in_turn`)."""
+        broader search's), refined and scored with its hypotheses on all the contact;
+        marked ``broadened`` with the touches it had. A new pose's touches count as it
+        would have predicted each in turn (:meth:`_in_turn`), as the hypotheses' did."""
         known = [(h.model, h.T_model_from_data, h.touch_evidence) for h in self.hypotheses]
-        new = [(n, np.asarray(T, float)) for n, T in poses if n in models]
-        usable = distinct_new_poses(known, new, self.point)
+        usable = [(n, np.asarray(T, float), 0.0) for n, T in poses if n in models]
         if usable and len(self.windows):
             likeliest = max([h.log_likelihood for h in self.hypotheses], default=-np.inf)
             usable = self._in_turn(usable, models, likeliest)
@@ -317,9 +315,10 @@ class Belief:
         """This belief with ``hypotheses`` (model, T_model_from_data, touch evidence)
         refined on all the points (one that moves p farther than its ``reach``, metres,
         counts its touches again where it came to, :meth:`_recounted`), the valleys of
-        the most probable explored (:meth:`_explored`; a new pose found there counts the
-        touches as it would have predicted each in turn, :meth:`_in_turn`), near-duplicates
-        merged, scored and normalised; ``whitening``: :meth:`_whitening`, when computed."""
+        the most probable explored
+        (:meth:`_explored`; a new pose found there counts the touches as it would have
+        predicted each in turn, :meth:`_in_turn`), near-duplicates merged, scored and
+        normalised; ``whitening``: :meth:`_whitening`, when already computed."""
         config = self.config
         whitening = self._whitening() if whitening is None else whitening
         found = self._fitted(hypotheses, models, whitening)
@@ -583,7 +582,9 @@ class Belief:
 def _fitted_order(names: Sequence[str]) -> list[int]:
     """The order in which :meth:`Belief._fitted` gives back poses of these models:
     grouped by model, models in order of first appearance, each's in its order."""
-    first = {name: k for k, name in enumerate(dict.fromkeys(names))}
+    first: dict[str, int] = {}
+    for name in names:
+        first.setdefault(name, len(first))
     return sorted(range(len(names)), key=lambda k: first[names[k]])
 
 

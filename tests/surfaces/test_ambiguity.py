@@ -119,28 +119,3 @@ def test_distinct_poses_with_no_radius_or_angle_keeps_every_pose() -> None:
     for radius, angle in ((0.0, 0.1), (1.0, 0.0)):
         kept = distinct_poses(R, t, np.array([2.0, 1.0, 3.0]), np.zeros(3), 3, radius, angle)
         np.testing.assert_array_equal(kept, [1, 0, 2])
-
-
-def test_new_poses_near_a_known_or_a_better_one_are_left_out() -> None:
-    from recognition.rigid import pose_matrix, rotation_about
-    from recognition.surfaces.registration.ambiguity import distinct_new_poses
-
-    def at(shift_m: float, turn_deg: float = 0.0) -> np.ndarray:
-        return pose_matrix(rotation_about(2, np.deg2rad(turn_deg)), [shift_m, 0.0, 0.0])
-
-    known = [("a", at(0.0), -3.0)]
-    poses = [
-        ("a", at(0.2e-3)),  # near the known pose: left out
-        ("b", at(0.2e-3)),  # another model's: kept
-        ("a", at(2e-3)),  # far from it: kept
-        ("a", at(2.3e-3)),  # near the better new one: left out
-        ("a", at(0.0, 30.0)),  # at p, but turned: kept
-        ("b", at(0.4e-3)),  # near the better pose of b: left out
-    ]
-    kept = distinct_new_poses(known, poses, np.zeros(3))
-    assert [(name, T[0, 3], e) for name, T, e in kept] == [
-        ("a", 2e-3, 0.0),
-        ("a", 0.0, 0.0),
-        ("b", 0.2e-3, 0.0),
-    ]
-    assert distinct_new_poses(known, [], np.zeros(3)) == []

@@ -10,7 +10,6 @@ about its centre or axis), the classic degeneracy of point-to-plane registration
 
 from __future__ import annotations
 
-from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -20,13 +19,7 @@ from recognition.rigid import point_to_plane_jacobian
 from recognition.surfaces.registration.config import FastConfig
 from recognition.surfaces.registration.data import effective_noise_m
 
-__all__ = [
-    "DISTINCT_ANGLE_RAD",
-    "DISTINCT_RADIUS_M",
-    "Resolution",
-    "distinct_new_poses",
-    "distinct_poses",
-]
+__all__ = ["DISTINCT_ANGLE_RAD", "DISTINCT_RADIUS_M", "Resolution", "distinct_poses"]
 
 Array = NDArray[np.float64]
 
@@ -60,22 +53,6 @@ def distinct_poses(
         alive &= ~(near & (np.einsum("bij,ij->b", R, R[i]) > cos_limit))
         alive[i] = False  # (with a radius or an angle of 0 no pose stands for itself)
     return order[np.array(kept, dtype=np.int64)]
-
-
-def distinct_new_poses(
-    known: Sequence[tuple[str, Array, float]], poses: Sequence[tuple[str, Array]], point: Array
-) -> list[tuple[str, Array, float]]:
-    """``poses`` (model, T_model_from_data (4, 4); best first) as (model, T, 0.0), without
-    any that is a near-duplicate (:func:`distinct_poses`) of a ``known`` pose (model, T,
-    _) of its model or of a better pose: it comes to the same answer."""
-    out: list[tuple[str, Array, float]] = []
-    for name in dict.fromkeys(n for n, _ in poses):
-        mine = [T for n, T in poses if n == name]
-        T = np.array([T for n, T, _ in known if n == name] + mine)
-        rank = np.arange(len(T), dtype=float)
-        kept = np.sort(distinct_poses(T[:, :3, :3], T[:, :3, 3], rank, point, len(T)))
-        out += [(name, T[k], 0.0) for k in kept if k >= len(T) - len(mine)]
-    return out
 
 
 @dataclass(frozen=True)
