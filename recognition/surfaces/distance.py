@@ -132,18 +132,18 @@ class MeshDistance:
         """Unit outward face normals (f, 3): by the corners' order, turned over on the
         :attr:`folded` faces (computed on first use and kept)."""
         if self._face_normals is None:
-            normals = triangle_normals(self.vertices[self.faces])
-            normals[self.folded] *= -1.0
-            self._face_normals = normals
+            self._face_normals = self.normals_of(np.arange(len(self.faces)))
         return self._face_normals
 
     def normals_of(self, faces: ArrayLike) -> Array:
         """Unit outward normals (..., 3) of the faces ``faces`` (...,), the same numbers as
-        :attr:`face_normals`, computed on each call (a search polishes on many models and
-        reads few faces of each: only the :attr:`folded` mask is kept)."""
-        f = np.asarray(faces, dtype=np.int64).ravel()
-        normals = triangle_normals(self.vertices[self.faces[f]])
-        normals[self.folded[f]] *= -1.0
+        :attr:`face_normals` (NaN for a face of -1: none), computed on each call (a search
+        polishes on many models and reads few faces of each: only the :attr:`folded` mask
+        is kept)."""
+        from recognition.surfaces import mesh_kernels
+
+        f = np.ascontiguousarray(faces, dtype=np.int64).reshape(-1)
+        normals = mesh_kernels.outward_normals(self.vertices, self.faces, self.folded, f)
         return normals.reshape(*np.shape(faces), 3)
 
     @property

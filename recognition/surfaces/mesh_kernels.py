@@ -30,6 +30,7 @@ __all__ = [
     "face_bounds",
     "first_hits",
     "interpolated_normals",
+    "outward_normals",
 ]
 
 #: How far outside a triangle, in barycentric coordinates, a ray still hits it.
@@ -538,4 +539,34 @@ def interpolated_normals(
         size = max(np.sqrt(size), 1e-12)
         for k in range(3):
             out[n, k] /= size
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def outward_normals(
+    vertices: Array, faces: IntArray, folded: NDArray[np.bool_], which: IntArray
+) -> Array:  # pragma: no cover - compiled
+    """Unit normals (m, 3) of the faces ``which`` (m,), by their corners' order, turned
+    over where ``folded``; NaN for a face index below 0 (no face)."""
+    out = np.empty((which.shape[0], 3))
+    for n in range(which.shape[0]):
+        f = which[n]
+        if f < 0:
+            out[n, 0] = out[n, 1] = out[n, 2] = np.nan
+            continue
+        a, b, c = faces[f, 0], faces[f, 1], faces[f, 2]
+        ux, uy, uz = (
+            vertices[b, 0] - vertices[a, 0],
+            vertices[b, 1] - vertices[a, 1],
+            vertices[b, 2] - vertices[a, 2],
+        )
+        vx, vy, vz = (
+            vertices[c, 0] - vertices[a, 0],
+            vertices[c, 1] - vertices[a, 1],
+            vertices[c, 2] - vertices[a, 2],
+        )
+        x, y, z = uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx
+        size = max(np.sqrt(x * x + y * y + z * z), 1e-300)
+        sign = -1.0 if folded[f] else 1.0
+        out[n, 0], out[n, 1], out[n, 2] = sign * (x / size), sign * (y / size), sign * (z / size)
     return out

@@ -204,6 +204,7 @@ def test_normals_of_some_faces_are_those_of_all_faces():
     faces = np.random.default_rng(4).integers(len(mesh.faces), size=(7, 5))
     np.testing.assert_array_equal(distance.normals_of(faces), distance.face_normals[faces])
     np.testing.assert_allclose(distance.face_normals, mesh.face_normals, atol=1e-12)
+    assert np.all(np.isnan(distance.normals_of([3, -1])[1]))  # -1: no face
 
 
 def folded_sphere() -> tuple[np.ndarray, np.ndarray, int]:
