@@ -220,20 +220,20 @@ def information_gain(
     Gaussian contact there is sqrt(sigma sqrt(8 pi) / window) (0 against a predicted
     miss), so that a touch tests the hypotheses against it even where they agree.
     """
+    from recognition.surfaces.planning_kernels import mixtures  # numba: when needed
+
     d = np.where(np.isnan(depths), MISS_DEPTH_M, depths)
-    gap = d[:, None, :] - d[None, :, :]  # (H, H, C)
-    overlap = np.exp(-(gap**2) / (8.0 * sigma_m**2))
     w = np.asarray(weights, float)
-    if none_weight > 0 and window_m > 0:
+    none = none_weight if none_weight > 0 and window_m > 0 else 0.0
+    total = np.sum(w) + none
+    w, none = w / total, none / total
+    mixture = mixtures(np.ascontiguousarray(d.T), w, 1.0 / (8.0 * sigma_m**2)).T  # (H, C)
+    gain = -(w @ np.log(mixture))
+    if none > 0:
         across = np.sqrt(min(sigma_m * np.sqrt(8.0 * np.pi) / window_m, 1.0))
         met = np.where(np.isnan(depths), 0.0, across)  # (H, C)
-        H = len(w)
-        full = np.ones((H + 1, H + 1, d.shape[1]))
-        full[:H, :H], full[:H, H], full[H, :H] = overlap, met, met
-        overlap, w = full, np.append(w, none_weight)
-    w = w / np.sum(w)
-    mixture = np.einsum("j,ijc->ic", w, overlap)
-    return np.asarray(-(w @ np.log(mixture)), dtype=np.float64)
+        gain = -(w @ np.log(mixture + none * met)) - none * np.log(w @ met + none)
+    return np.asarray(gain, dtype=np.float64)
 
 
 def without_edges(gain: Array, depths: Array, weights: Array) -> Array:

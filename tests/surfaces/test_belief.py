@@ -364,6 +364,31 @@ def test_information_gain_is_log_two_for_two_far_apart_outcomes_and_zero_for_one
     np.testing.assert_allclose(miss, [np.log(2)], atol=1e-9)
 
 
+def test_information_gain_sums_the_overlaps_of_every_pair_of_outcomes():
+    # against the sum written out over all (H + 1) x (H + 1) pairs, "none of these" the last
+    rng = np.random.default_rng(8)
+    sigma, window, none = 0.05e-3, 12e-3, 0.2
+    for H, C in ((1, 5), (7, 40), (60, 30)):
+        depths = rng.uniform(0, 12e-3, (H, C)) * rng.choice([1.0, 0.01], (H, C))
+        depths[rng.random((H, C)) < 0.1] = np.nan
+        weights = rng.random(H)
+        d = np.where(np.isnan(depths), 1.0, depths)
+        overlap = np.ones((H + 1, H + 1, C))
+        overlap[:H, :H] = np.exp(-((d[:, None] - d[None]) ** 2) / (8 * sigma**2))
+        met = np.where(np.isnan(depths), 0.0, np.sqrt(sigma * np.sqrt(8 * np.pi) / window))
+        overlap[:H, H] = overlap[H, :H] = met
+        w = np.append(weights, none) / (weights.sum() + none)
+        expected = -(w @ np.log(np.einsum("j,ijc->ic", w, overlap)))
+        got = information_gain(depths, weights, sigma, none, window)
+        np.testing.assert_allclose(got, expected, rtol=1e-12, atol=1e-14)
+        alone = -(w[:H] / w[:H].sum()) @ np.log(
+            np.einsum("j,ijc->ic", w[:H] / w[:H].sum(), overlap[:H, :H])
+        )
+        np.testing.assert_allclose(
+            information_gain(depths, weights, sigma), alone, rtol=1e-12, atol=1e-14
+        )
+
+
 def test_touches_a_likely_hypothesis_predicts_to_miss_are_made_only_when_nothing_else_tells():
     # two equally likely hypotheses; touch 0: both meet the surface 1 mm apart, touch 1:
     # the first meets it, the second predicts nothing there
