@@ -54,7 +54,7 @@ from scipy.linalg import lapack
 from scipy.special import gammaincinv
 
 from recognition.errors import InvalidArgument
-from recognition.rigid import point_to_plane_jacobian, pose_matrix
+from recognition.rigid import point_to_plane_jacobian, pose_matrix, skew
 from recognition.surfaces.belief_config import BeliefConfig
 from recognition.surfaces.closest_fit import refine_poses
 from recognition.surfaces.data_curves import DataCurves
@@ -424,17 +424,15 @@ class Belief:
             signed = flat.reshape(len(R), -1)
             errors = np.mean(np.minimum(np.abs(signed), level), axis=1)
             symmetries = model.symmetries
+            locations = R @ self.point + t
+            smooth = smooth_normals(model, closest, face).reshape(moved.shape)
+            pivots, pose_covs, location_covs = self._laplace(
+                moved, smooth, np.abs(signed) <= level, locations, whitening
+            )
+            whitened = np.clip(signed, -level, level) @ whitening[: self.n_curve_points].T
             for k in range(len(R)):
-                r = np.clip(signed[k], -level, level)
-                location = R[k] @ self.point + t[k]
-                rows = slice(k * len(self.points), (k + 1) * len(self.points))
-                smooth = smooth_normals(model, closest[rows], face[rows])
-                pivot, pose_cov, location_cov = self._laplace(
-                    moved[k], smooth, np.abs(signed[k]) <= level, location, whitening
-                )
                 evidence = entries[k][1]
-                whitened = whitening[: self.n_curve_points] @ r
-                log_likelihood = evidence - float(np.sum(huber(whitened, self.noise.huber_k)))
+                log_likelihood = evidence - float(np.sum(huber(whitened[k], self.noise.huber_k)))
                 log_likelihood += miss_evidence(
                     model.distance,
                     R[k],
@@ -447,16 +445,19 @@ class Belief:
                     Hypothesis(
                         name,
                         pose_matrix(R[k], t[k]),
-                        location,
+                        locations[k],
                         float(errors[k]),
                         log_likelihood,
                         0.0,
                         np.flatnonzero(np.abs(signed[k]) > level),
-                        pivot,
-                        pose_cov,
-                        location_cov,
+                        pivots[k],
+                        pose_covs[k],
+                        location_covs[k],
                         np.vstack(
-                            [location, symmetries[:, :3, :3] @ location + symmetries[:, :3, 3]]
+                            [
+                                locations[k],
+                                symmetries[:, :3, :3] @ locations[k] + symmetries[:, :3, 3],
+                            ]
                         ),
                         evidence,
                     )
@@ -530,25 +531,24 @@ class Belief:
         location: Array,
         whitening: Array,
     ) -> tuple[Array, Array, Array]:
-        """The pivot, pose covariance (6, 6) and location covariance (3, 3) of a fit: the
-        covariance is the inverse of J^T Sigma^-1 J plus the weak prior, J (n, 6) the
-        residuals' change under a turn about the pivot and a shift (outliers do not
-        inform)."""
-        pivot = moved[inliers].mean(axis=0) if inliers.any() else moved.mean(axis=0)
-        J = point_to_plane_jacobian(moved, normals, pivot)
+        """The pivots (k, 3), pose (k, 6, 6) and location (k, 3, 3) covariances of k fits
+        (``moved`` (k, n, 3) points, their surface's ``normals``, ``inliers`` (k, n), p's
+        ``location`` (k, 3)): the inverse of J^T Sigma^-1 J plus the weak prior, J (n, 6) the
+        residuals' change under a turn about the inliers' mean and a shift."""
+        count = inliers.sum(axis=1, keepdims=True)
+        mean = np.einsum("kn,kni->ki", inliers, moved) / np.maximum(count, 1)
+        pivot = np.where(count > 0, mean, moved.mean(axis=1))
+        J = point_to_plane_jacobian(moved, normals, pivot[:, None, :])
         J[~inliers] = 0.0
-        prior = np.r_[
-            np.full(3, self.config.prior_rotation_rad**-2),
-            np.full(3, self.config.prior_translation_m**-2),
-        ]
+        rotation, translation = self.config.prior_rotation_rad, self.config.prior_translation_m
+        prior = np.diag(np.repeat([rotation**-2, translation**-2], 3))
         Jw = whitening @ J
-        information = Jw.T @ Jw + np.diag(prior)
-        pose = np.linalg.inv(information)
-        pose = 0.5 * (pose + pose.T)
-        arm = location - pivot
-        skew = np.array([[0, -arm[2], arm[1]], [arm[2], 0, -arm[0]], [-arm[1], arm[0], 0]])
-        Jp = np.concatenate([-skew, np.eye(3)], axis=1)  # d location / d (turn, shift)
-        return pivot, pose, Jp @ pose @ Jp.T
+        pose = np.asarray(np.linalg.inv(np.swapaxes(Jw, 1, 2) @ Jw + prior), dtype=np.float64)
+        pose = 0.5 * (pose + np.swapaxes(pose, 1, 2))
+        Jp = np.concatenate(  # d location / d (turn, shift)
+            [-skew(location - pivot), np.broadcast_to(np.eye(3), (len(pivot), 3, 3))], axis=2
+        )
+        return pivot, pose, Jp @ pose @ np.swapaxes(Jp, 1, 2)
 
     def _predicted(
         self,
