@@ -562,12 +562,14 @@ class Belief:
         :func:`~recognition.surfaces.touch_evidence.predicted_evidence`);
         ``whitening``: :meth:`_whitening` of all the points."""
         rows = whitening[self.n_curve_points + first :]
-        return [
-            predicted_evidence(
-                models[h.model],
-                h.T_model_from_data,
-                h.pivot,
-                h.pose_covariance,
+        out = np.zeros(len(hypotheses))
+        for name in dict.fromkeys(h.model for h in hypotheses):
+            mine = [k for k, h in enumerate(hypotheses) if h.model == name]
+            out[mine] = predicted_evidence(
+                models[name],
+                np.array([hypotheses[k].T_model_from_data for k in mine]),
+                np.array([hypotheses[k].pivot for k in mine]),
+                np.array([hypotheses[k].pose_covariance for k in mine]),
                 self.points,
                 rows,
                 self.windows[first:],
@@ -575,8 +577,7 @@ class Belief:
                 self.noise,
                 self.sensor_m,
             )
-            for h in hypotheses
-        ]
+        return [float(e) for e in out]
 
 
 def _fitted_order(names: Sequence[str]) -> list[int]:

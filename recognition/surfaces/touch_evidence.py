@@ -63,48 +63,41 @@ Array = NDArray[np.float64]
 
 def point_evidence(
     whitened: Array, pose_variance: Array, spread: Array, windows: Array, huber_k: float
-) -> float:
-    """Log ratio of the touches' contact points (module docstring): ``whitened`` (k,) the
-    touches' whitened residuals z_i at the predicting pose, ``pose_variance`` (k,) q_i
-    the variance its uncertainty adds to them, ``spread`` (k,) L_ii and ``windows`` (k,)
-    the approaches' lengths w_i (metres)."""
-    if len(whitened) == 0:
-        return 0.0
+) -> Array:
+    """Log ratio of the touches' contact points (module docstring): ``whitened`` (..., k)
+    the touches' whitened residuals z_i at the predicting pose, ``pose_variance`` (..., k)
+    q_i the variance its uncertainty adds to them, ``spread`` (k,) L_ii and ``windows``
+    (k,) the approaches' lengths w_i (metres); summed over the touches, (...)."""
     wide = 1.0 + np.maximum(pose_variance, 0.0)
-    return float(
-        np.sum(
-            -huber(whitened / np.sqrt(wide), huber_k)
-            - 0.5 * np.log(wide)
-            - np.log(np.sqrt(2.0 * np.pi) * spread / windows)
-        )
-    )
+    terms = -huber(whitened / np.sqrt(wide), huber_k) - 0.5 * np.log(wide)
+    return np.sum(terms - np.log(np.sqrt(2.0 * np.pi) * spread / windows), axis=-1)
 
 
 def normal_evidence(
     predicted: Array, sensed: Array, turn_covariance: Array, sigma_rad: float, huber_k: float
-) -> float:
+) -> Array:
     """Log ratio of the touches' sensed normals (module docstring): ``predicted`` and
-    ``sensed`` (k, 3) unit normals in one frame (rows of NaN in ``sensed``: no normal
-    sensed), ``turn_covariance`` (3, 3) the hypothesis's turn in that frame, radians^2."""
-    known = np.all(np.isfinite(sensed), axis=1)
-    n, s = predicted[known], sensed[known]
-    if not len(n):
-        return 0.0
+    ``sensed`` (..., k, 3) unit normals in one frame (rows of NaN in ``sensed``: no normal
+    sensed), ``turn_covariance`` (..., 3, 3) the hypothesis's turn in that frame,
+    radians^2; summed over the touches, (...)."""
+    known = np.all(np.isfinite(sensed), axis=-1)
+    n, s = predicted, np.where(known[..., None], sensed, predicted)
     # an orthonormal basis e1, e2 = n x e1 of each n's tangent plane
-    e1 = cross(n, np.eye(3)[np.argmin(np.abs(n), axis=1)])
-    e1 /= np.sqrt(np.sum(e1 * e1, axis=1))[:, None]
+    e1 = cross(n, np.eye(3)[np.argmin(np.abs(n), axis=-1)])
+    e1 /= np.sqrt(np.sum(e1 * e1, axis=-1))[..., None]
     e2 = cross(n, e1)
-    tilt = np.stack([np.sum(e1 * s, axis=1), np.sum(e2 * s, axis=1)], axis=1)
-    size = np.sqrt(np.sum(tilt * tilt, axis=1))[:, None]
+    tilt = np.stack([np.sum(e1 * s, axis=-1), np.sum(e2 * s, axis=-1)], axis=-1)
+    size = np.sqrt(np.sum(tilt * tilt, axis=-1))[..., None]
     # the tilt's direction; any one for a normal sensed opposite the predicted
     along = np.where(size > 1e-15, tilt / np.maximum(size, 1e-300), [1.0, 0.0])
-    d = np.arccos(np.clip(np.sum(n * s, axis=1), -1.0, 1.0))[:, None] * along
-    M = np.stack([-e2, e1], axis=1)  # B [n]x (k, 2, 3): a turn w tilts n by w x n
-    C = sigma_rad**2 * np.eye(2) + M @ turn_covariance @ M.transpose(0, 2, 1)
-    a, b, c = C[:, 0, 0], C[:, 0, 1] + C[:, 1, 0], C[:, 1, 1]
-    det = a * c - C[:, 0, 1] * C[:, 1, 0]
-    z2 = (d[:, 0] ** 2 * c - d[:, 0] * d[:, 1] * b + d[:, 1] ** 2 * a) / det  # d^T C^-1 d
-    return float(np.sum(-huber(np.sqrt(np.maximum(z2, 0.0)), huber_k) - 0.5 * np.log(det)))
+    d = np.arccos(np.clip(np.sum(n * s, axis=-1), -1.0, 1.0))[..., None] * along
+    M = np.stack([-e2, e1], axis=-2)  # B [n]x (..., k, 2, 3): a turn w tilts n by w x n
+    C = sigma_rad**2 * np.eye(2) + M @ turn_covariance[..., None, :, :] @ np.swapaxes(M, -1, -2)
+    a, b, c = C[..., 0, 0], C[..., 0, 1] + C[..., 1, 0], C[..., 1, 1]
+    det = a * c - C[..., 0, 1] * C[..., 1, 0]
+    z2 = (d[..., 0] ** 2 * c - d[..., 0] * d[..., 1] * b + d[..., 1] ** 2 * a) / det
+    terms = -huber(np.sqrt(np.maximum(z2, 0.0)), huber_k) - 0.5 * np.log(det)  # d^T C^-1 d
+    return np.sum(np.where(known, terms, 0.0), axis=-1)
 
 
 def evidence_bounds(spread: Array, windows: Array, normals: Array, sigma_rad: float) -> Array:
@@ -127,39 +120,40 @@ def predicted_evidence(
     normals: Array,
     noise: NoiseModel,
     sensor_m: float,
-) -> float:
-    """Log ratio against "none of these" of the last k of the contact ``points`` (n, 3),
-    the touches, as a hypothesis predicted them before they were made (module
-    docstring): ``model`` at ``T_model_from_data`` with the Laplace covariance
-    ``pose_covariance`` of a turn about ``pivot`` and a shift (model frame);
-    ``whitening_rows`` (k, n) the touches' rows of the inverse Cholesky factor of Sigma
-    over all the points; ``windows`` (k,) the approaches' lengths and ``normals`` (k, 3)
-    the sensed normals (rows of NaN: none), data frame; ``noise`` and ``sensor_m`` as the
-    belief's."""
-    k = len(whitening_rows)
-    if k == 0:
-        return 0.0
-    R, t = T_model_from_data[:3, :3], T_model_from_data[:3, 3]
-    moved = points @ R.T + t
-    signed, closest, face = model.distance.signed_closest(moved)
-    surface = smooth_normals(model, closest, face)
+) -> Array:
+    """Log ratios (m,) against "none of these" of the last k of the contact ``points``
+    (n, 3), the touches, as m hypotheses of one model predicted them before they were
+    made (module docstring): ``model`` at ``T_model_from_data`` (m, 4, 4) with the
+    Laplace covariances ``pose_covariance`` (m, 6, 6) of a turn about ``pivot`` (m, 3)
+    and a shift (model frame); ``whitening_rows`` (k, n) the touches' rows of the inverse
+    Cholesky factor of Sigma over all the points; ``windows`` (k,) the approaches' lengths
+    and ``normals`` (k, 3) the sensed normals (rows of NaN: none), data frame; ``noise``
+    and ``sensor_m`` as the belief's."""
+    k, m = len(whitening_rows), len(T_model_from_data)
+    if k == 0 or m == 0:
+        return np.zeros(m)
+    R, t = T_model_from_data[:, :3, :3], T_model_from_data[:, :3, 3]
+    moved = np.einsum("nj,mij->mni", points, R) + t[:, None, :]
+    flat, closest, face = model.distance.signed_closest(moved.reshape(-1, 3))
+    signed = flat.reshape(m, -1)
+    surface = smooth_normals(model, closest, face).reshape(moved.shape)
     # the contact before the touches counts at most the outlier level, as in the fit;
     # the touches as they are (a miss by millimetres is no outlier of the sensor)
     level = noise.outlier_level_m(sensor_m)
-    residuals = np.concatenate([np.clip(signed[:-k], -level, level), signed[-k:]])
-    J = whitening_rows @ point_to_plane_jacobian(moved, surface, pivot)
+    residuals = np.concatenate([np.clip(signed[:, :-k], -level, level), signed[:, -k:]], axis=1)
+    J = whitening_rows @ point_to_plane_jacobian(moved, surface, pivot[:, None, :])
     spread = 1.0 / whitening_rows[np.arange(k), len(points) - k + np.arange(k)]
     score = point_evidence(
-        whitening_rows @ residuals,
-        np.einsum("ij,jk,ik->i", J, pose_covariance, J),
+        residuals @ whitening_rows.T,
+        np.einsum("mij,mjl,mil->mi", J, pose_covariance, J),
         spread,
         windows,
         noise.huber_k,
     )
     return score + normal_evidence(
-        surface[len(points) - k :],
-        normals @ R.T,
-        pose_covariance[:3, :3],
+        surface[:, len(points) - k :],
+        np.einsum("kj,mij->mki", normals, R),
+        pose_covariance[:, :3, :3],
         noise.normal_sigma_rad(),
         noise.huber_k,
     )

@@ -40,6 +40,25 @@ def test_no_sensed_normal_counts_nothing_and_an_opposite_one_counts_much():
     assert opposite == pytest.approx(-(3.0 * np.pi / SIGMA - 4.5) - np.log(SIGMA**2))
 
 
+def test_the_normals_of_several_touches_and_hypotheses_score_as_each_alone():
+    rng = np.random.default_rng(2)
+    predicted = rng.normal(size=(4, 5, 3))
+    predicted /= np.linalg.norm(predicted, axis=-1, keepdims=True)
+    sensed = predicted + 0.05 * rng.normal(size=(4, 5, 3))
+    sensed /= np.linalg.norm(sensed, axis=-1, keepdims=True)
+    sensed[:, [1, 3]] = np.nan  # not sensed
+    A = rng.normal(size=(4, 3, 3)) * 0.02
+    turn = A @ np.swapaxes(A, 1, 2)
+    together = normal_evidence(predicted, sensed, turn, SIGMA, 3.0)
+    for h in range(4):
+        alone = sum(
+            normal_evidence(predicted[h, [i]], sensed[h, [i]], turn[h], SIGMA, 3.0)
+            for i in (0, 2, 4)
+        )
+        assert together[h] == pytest.approx(alone, rel=1e-12)
+        assert normal_evidence(predicted[h, [1]], sensed[h, [1]], turn[h], SIGMA, 3.0) == 0.0
+
+
 def test_the_model_mismatch_adds_its_slope_to_the_sensors_normal_noise():
     noise = NoiseModel(normal_sd_rad=0.03, model_mismatch_m=0.1e-3, correlation_m=5e-3)
     assert noise.normal_sigma_rad() == pytest.approx(np.hypot(0.03, np.sqrt(3) * 0.1 / 5))
