@@ -378,8 +378,7 @@ class Belief:
 
     def _touch_bounds(self) -> Array:
         """The most each touch that met the surface can add to a hypothesis's log ratio
-        against "none of these", (k,) (:func:`~recognition.surfaces.touch_evidence.
-        evidence_bounds`)."""
+        against "none of these", (k,) (:func:`touch_evidence.evidence_bounds`)."""
         spread = 1.0 / np.diag(self._whitening())[self.n_curve_points :]
         return evidence_bounds(spread, self.windows, self.normals, self.noise.normal_sigma_rad())
 
