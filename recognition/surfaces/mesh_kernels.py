@@ -375,6 +375,21 @@ def closest_points(
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
+def _edges(
+    vertices: Array, a: int, b: int, c: int
+) -> tuple[float, float, float, float, float, float]:  # pragma: no cover - compiled
+    """The edges b - a and c - a of triangle abc, coordinate by coordinate."""
+    return (
+        vertices[b, 0] - vertices[a, 0],
+        vertices[b, 1] - vertices[a, 1],
+        vertices[b, 2] - vertices[a, 2],
+        vertices[c, 0] - vertices[a, 0],
+        vertices[c, 1] - vertices[a, 1],
+        vertices[c, 2] - vertices[a, 2],
+    )
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
 def _ray_triangle(
     o: tuple[float, float, float],
     d: tuple[float, float, float],
@@ -388,16 +403,7 @@ def _ray_triangle(
     triangle by ``RAY_SLACK`` (no unit: the same at every scale), so that a ray through
     an edge or a vertex hits a neighbour whatever the rounding; one parallel to the
     triangle misses it."""
-    e1x, e1y, e1z = (
-        vertices[b, 0] - vertices[a, 0],
-        vertices[b, 1] - vertices[a, 1],
-        vertices[b, 2] - vertices[a, 2],
-    )
-    e2x, e2y, e2z = (
-        vertices[c, 0] - vertices[a, 0],
-        vertices[c, 1] - vertices[a, 1],
-        vertices[c, 2] - vertices[a, 2],
-    )
+    e1x, e1y, e1z, e2x, e2y, e2z = _edges(vertices, a, b, c)
     px, py, pz = d[1] * e2z - d[2] * e2y, d[2] * e2x - d[0] * e2z, d[0] * e2y - d[1] * e2x
     det = e1x * px + e1y * py + e1z * pz
     if det == 0.0:
@@ -555,16 +561,7 @@ def outward_normals(
             out[n, 0] = out[n, 1] = out[n, 2] = np.nan
             continue
         a, b, c = faces[f, 0], faces[f, 1], faces[f, 2]
-        ux, uy, uz = (
-            vertices[b, 0] - vertices[a, 0],
-            vertices[b, 1] - vertices[a, 1],
-            vertices[b, 2] - vertices[a, 2],
-        )
-        vx, vy, vz = (
-            vertices[c, 0] - vertices[a, 0],
-            vertices[c, 1] - vertices[a, 1],
-            vertices[c, 2] - vertices[a, 2],
-        )
+        ux, uy, uz, vx, vy, vz = _edges(vertices, a, b, c)
         x, y, z = uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx
         size = max(np.sqrt(x * x + y * y + z * z), 1e-300)
         sign = -1.0 if folded[f] else 1.0
