@@ -18,6 +18,7 @@ __all__ = [
     "cross",
     "point_to_plane_jacobian",
     "pose_matrix",
+    "posed",
     "random_planar_motion",
     "random_rigid_motion",
     "rotation_2d",
@@ -125,6 +126,13 @@ def apply_pose(T: ArrayLike, points: ArrayLike) -> Array:
     """Points (n, d) moved by the homogeneous pose T (d + 1, d + 1)."""
     T = np.asarray(T, dtype=float)
     return np.asarray(points, dtype=float) @ T[:-1, :-1].T + T[:-1, -1]
+
+
+def posed(R: ArrayLike, t: ArrayLike, points: ArrayLike) -> Array:
+    """Points (n, d) moved by each of k poses, rotations R (k, d, d) and translations
+    t (k, d): (k, n, d)."""
+    moved = np.einsum("nj,kij->kni", np.asarray(points, float), np.asarray(R, float))
+    return np.asarray(moved + np.asarray(t, float)[:, None, :], dtype=np.float64)
 
 
 def random_rigid_motion(rng: np.random.Generator, translation_scale: float = 0.1) -> Array:

@@ -54,7 +54,7 @@ from scipy.linalg import lapack
 from scipy.special import gammaincinv
 
 from recognition.errors import InvalidArgument
-from recognition.rigid import point_to_plane_jacobian, pose_matrix, skew
+from recognition.rigid import point_to_plane_jacobian, pose_matrix, posed, skew
 from recognition.surfaces.belief_config import BeliefConfig
 from recognition.surfaces.closest_fit import refine_poses
 from recognition.surfaces.data_curves import DataCurves
@@ -418,7 +418,7 @@ class Belief:
                 whitening,
                 self.noise.huber_k,
             )
-            moved = np.einsum("nj,kij->kni", self.points, R) + t[:, None, :]
+            moved = posed(R, t, self.points)
             flat, closest, face = model.distance.signed_closest(moved.reshape(-1, 3))
             signed = flat.reshape(len(R), -1)
             errors = np.mean(np.minimum(np.abs(signed), level), axis=1)

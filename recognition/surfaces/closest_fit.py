@@ -8,7 +8,7 @@ from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
 from recognition.least_squares import LeastSquaresConfig, State, damped_least_squares
-from recognition.rigid import point_to_plane_jacobian
+from recognition.rigid import point_to_plane_jacobian, posed
 from recognition.surfaces.distance import MeshDistance
 
 __all__ = ["refine_poses"]
@@ -44,7 +44,7 @@ def refine_poses(
     n = len(points)
 
     def evaluate(R: Array, t: Array) -> PoseState:
-        X = np.einsum("nj,kij->kni", points, R) + t[:, None, :]
+        X = posed(R, t, points)
         distance, q, face = distance_to.closest(X.reshape(-1, 3))
         k = len(R)
         normals = distance_to.normals_of(face).reshape(k, n, 3)

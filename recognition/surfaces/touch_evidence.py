@@ -43,7 +43,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from recognition.errors import InvalidArgument
-from recognition.rigid import cross, point_to_plane_jacobian
+from recognition.rigid import cross, point_to_plane_jacobian, posed
 from recognition.surfaces.distance import MeshDistance
 from recognition.surfaces.mesh_model import MeshModel
 from recognition.surfaces.noise_model import NoiseModel, huber
@@ -133,7 +133,7 @@ def predicted_evidence(
     if k == 0 or m == 0:
         return np.zeros(m)
     R, t = T_model_from_data[:, :3, :3], T_model_from_data[:, :3, 3]
-    moved = np.einsum("nj,mij->mni", points, R) + t[:, None, :]
+    moved = posed(R, t, points)
     flat, closest, face = model.distance.signed_closest(moved.reshape(-1, 3))
     signed = flat.reshape(m, -1)
     surface = smooth_normals(model, closest, face).reshape(moved.shape)

@@ -228,11 +228,11 @@ def information_gain(
     total = np.sum(w) + none
     w, none = w / total, none / total
     mixture = mixtures(np.ascontiguousarray(d.T), w, 1.0 / (8.0 * sigma_m**2)).T  # (H, C)
-    gain = -(w @ np.log(mixture))
-    if none > 0:
-        across = np.sqrt(min(sigma_m * np.sqrt(8.0 * np.pi) / window_m, 1.0))
-        met = np.where(np.isnan(depths), 0.0, across)  # (H, C)
-        gain = -(w @ np.log(mixture + none * met)) - none * np.log(w @ met + none)
+    if none == 0:
+        return np.asarray(-(w @ np.log(mixture)), dtype=np.float64)
+    across = np.sqrt(min(sigma_m * np.sqrt(8.0 * np.pi) / window_m, 1.0))
+    met = np.where(np.isnan(depths), 0.0, across)  # (H, C)
+    gain = -(w @ np.log(mixture + none * met)) - none * np.log(w @ met + none)
     return np.asarray(gain, dtype=np.float64)
 
 
