@@ -10,9 +10,11 @@ not, the curves and the touches' contact points are searched again more broadly
 (:meth:`~recognition.surfaces.database.ModelDatabase.broaden`, at most once per touch):
 poses the first search never proposed, but which fit all the contact as well (or better:
 the hypotheses may all be wrong and still explain the contact), compete before an answer
-is called sure or given. After a touch that met nothing, or while no hypothesis explains
-the contact, the next touch is planned near the contact made (``LOST_WITHIN_M``), where
-the object surely is, when a touch there can tell the hypotheses apart. A belief that the
+is called sure or given; the last look, with no touch left to test a rival, keeps every
+pose its pair search refines (``ModelDatabase.broaden(..., last=True)``). After a touch
+that met nothing, or while no hypothesis explains the contact, the next touch is planned
+near the contact made (``LOST_WITHIN_M``), where the object surely is, when a touch there
+can tell the hypotheses apart. A belief that the
 broader search before a touch made sure is tested by that touch (planned with "none of
 these" counted ``MAX_NONE_WEIGHT`` probable among its outcomes): the search chose the
 poses that fit the contact best, and a pose so chosen may fit what it was chosen on and
@@ -253,10 +255,11 @@ def verify(
     if belief.confidence >= confidence:
         stop = "sure"
     elif steps and len(belief.windows):
-        # not sure after the touches: a last look for poses that fit all the contact (its
-        # time counted with the last touch's)
+        # not sure after the touches: a last look for poses that fit all the contact, the
+        # belief judging every pose the pair search refines (its time counted with the
+        # last touch's)
         start = time.perf_counter()
-        belief = database.broaden(belief)
+        belief = database.broaden(belief, last=True)
         searched = time.perf_counter() - start
         broaden_s += searched
         steps[-1] = replace(steps[-1], recognition_time_s=steps[-1].recognition_time_s + searched)

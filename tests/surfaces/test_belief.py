@@ -302,6 +302,32 @@ def test_a_last_touch_that_leaves_the_belief_unsure_has_a_broader_search_after_i
     assert done.belief.broadened == 1  # not sure after it: searched again
 
 
+def test_the_last_look_after_the_touches_keeps_every_pair_pose_it_refines(database, monkeypatch):
+    synthetic = _curves(
+        database["blob"], 2500, seed=2, noise=0.002e-3, n_points=21, spacing_m=0.6e-3
+    )
+    result = database.recognize(synthetic.curves, models=["blob"])
+    import recognition.surfaces.database as database_module
+
+    seen = []
+    real = database_module.pair_search
+    monkeypatch.setattr(
+        database_module,
+        "pair_search",
+        lambda *args, **kw: seen.append(kw) or real(*args, **kw),
+    )
+
+    def touch(plan):  # the predicted contact, with the normal the sensor felt
+        return Contact(plan.point, -plan.direction)
+
+    done = verify(database, result.belief, touch, _limits(synthetic), max_touches=1, confidence=1.0)
+    assert done.belief.broadened == 1 and len(seen) == 1  # the one search after the touch
+    assert seen[0]["refined"] == seen[0]["kept"] == database_module.LAST_REFINED
+    # a broader search during the touches keeps the search's own numbers
+    database.broaden(done.steps[0].belief)
+    assert len(seen) == 2 and "refined" not in seen[1]
+
+
 def test_a_belief_a_search_made_sure_is_tested_by_a_touch(database, monkeypatch):
     synthetic = _curves(database["blob"], 2500, seed=1, noise=0.005e-3)
     sure = database.recognize(synthetic.curves, models=["blob"]).belief

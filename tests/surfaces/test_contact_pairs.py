@@ -8,6 +8,7 @@ from recognition.rigid import pose_matrix, rotation_from_vector
 from recognition.surfaces.distance import FieldStack
 from recognition.surfaces.mesh_model import MeshModel
 from recognition.surfaces.registration.contact_pairs import (
+    N_KEPT,
     PAIR_SPACING_M,
     contact_costs,
     pair_features,
@@ -95,13 +96,20 @@ def test_the_search_refines_pair_poses_onto_the_surface(model):
     curve_points = model.vertices[patch] @ Ti[:3, :3].T + Ti[:3, 3]
     p, n, c, m = _oriented_pair(model, T, i, j)
     stack = FieldStack.of([model.distance_field])
-    found = pair_search([model], stack, np.array([0]), curve_points, p, n, c[None], m[None], 0.1e-3)
-    again = pair_search([model], stack, np.array([0]), curve_points, p, n, c[None], m[None], 0.1e-3)
+    args = ([model], stack, np.array([0]), curve_points, p, n, c[None], m[None], 0.1e-3)
+    found = pair_search(*args)
+    again = pair_search(*args)
     assert found and len(found) == len(again)  # same arguments, same poses
     assert all(np.array_equal(a[1], b[1]) for a, b in zip(found, again, strict=True))
     name, pose, error = found[0]
     assert name == "blob" and error < 0.02e-3
     assert np.linalg.norm(pose[:3, :3] @ p + pose[:3, 3] - model.vertices[i]) < 0.5e-3
+    # refining more of the scored poses keeps more distinct ones, at most as many as asked,
+    # and the best of them fits at least as well (the first refined are the same)
+    wide = pair_search(*args, refined=64, kept=64)
+    assert len(found) == N_KEPT < len(wide) <= 64
+    assert min(e for _, _, e in wide) <= error + 1e-12
+    assert len(pair_search(*args, refined=64, kept=2)) == 2
 
 
 def test_a_touch_that_met_nothing_costs_a_pose_that_puts_the_surface_across_it(model):

@@ -61,7 +61,7 @@ FEATURE_TOLERANCE = 0.25
 #: touches and at most ``SCORE_POINTS`` of the curves' points ...
 MAX_SCORED = 20_000
 SCORE_POINTS = 12
-#: ... the best this many refined on the model's field ...
+#: ... the best this many refined on the model's field (the defaults of ``pair_search``) ...
 N_REFINED = 16
 #: ... and this many distinct ones returned.
 N_KEPT = 8
@@ -189,6 +189,8 @@ def pair_search(
     threshold_m: float,
     seed: int = 0,
     misses: Sequence[tuple[Array, Array, float]] = (),
+    refined: int = N_REFINED,
+    kept: int = N_KEPT,
 ) -> list[tuple[str, Array, float]]:
     """Poses of ``models`` (fields ``which_field`` of ``stack``) that fit the curves'
     points (n, 3) and the ``touches`` (k, 3), started from every model pair matching p
@@ -196,11 +198,11 @@ def pair_search(
     (``touch_normals`` (k, 3); rows with NaN are not paired): scored on the fields at the
     touches and ``SCORE_POINTS`` of the curves' points (each point's squared distance
     counted at most ``threshold_m`` squared, and each of the ``misses`` as well,
-    :func:`contact_costs`), the best ``N_REFINED`` of each model
-    refined by Gauss-Newton on all the points (the touches never clipped), ``N_KEPT``
-    distinct ones kept. Returns (model name,
-    T_model_from_data (4, 4), mean distance of the curves' points from the model, each
-    counted at most ``threshold_m``). Same arguments and seed, same poses."""
+    :func:`contact_costs`), the best ``refined`` of each model refined by Gauss-Newton
+    on all the points (the touches never clipped), at most ``kept`` distinct ones kept.
+    Returns (model name, T_model_from_data (4, 4), mean distance of the curves' points
+    from the model, each counted at most ``threshold_m``). Same arguments and seed, same
+    poses."""
     rng = np.random.default_rng(seed)
     paired = np.flatnonzero(np.all(np.isfinite(touch_normals), axis=1))
     data = np.concatenate([curve_points, touches])
@@ -217,7 +219,7 @@ def pair_search(
             pick = np.sort(rng.choice(len(R), size=MAX_SCORED, replace=False))
             R, t = R[pick], t[pick]
         cost = contact_costs(stack, field, scoring, misses, R, t, threshold_m)
-        best = np.argsort(cost, kind="stable")[:N_REFINED]
+        best = np.argsort(cost, kind="stable")[:refined]
         R, t, _, _ = fit_on_fields(
             stack,
             np.full(len(best), field),
@@ -232,6 +234,6 @@ def pair_search(
         errors = np.mean(
             np.minimum(np.abs(stack(placed, np.full(len(R), field))), threshold_m), axis=1
         )
-        for k in distinct_poses(R, t, errors, point, N_KEPT):
+        for k in distinct_poses(R, t, errors, point, kept):
             out.append((model.name, pose_matrix(R[k], t[k]), float(errors[k])))
     return out
