@@ -10,8 +10,9 @@ not, the curves and the touches' contact points are searched again more broadly
 (:meth:`~recognition.surfaces.database.ModelDatabase.broaden`, at most once per touch):
 poses the first search never proposed, but which fit all the contact as well (or better:
 the hypotheses may all be wrong and still explain the contact), compete before an answer
-is called sure or given; the last look, with no touch left to test a rival, keeps every
-pose its pair search refines (``ModelDatabase.broaden(..., last=True)``). After a touch
+is called sure or given. The last two may end the touches, with no touch left to test a
+rival: they keep every pose their pair search refines (``ModelDatabase.broaden(...,
+final=True)``). After a touch
 that met nothing, or while no hypothesis explains the contact, the next touch is planned
 near the contact made (``LOST_WITHIN_M``), where the object surely is, when a touch there
 can tell the hypotheses apart. A belief that the
@@ -236,8 +237,9 @@ def verify(
                 )
             if belief.confidence >= confidence:
                 # sure after a touch: first look elsewhere for poses that fit all the contact
+                # (thoroughly: a sure answer ends the touches)
                 searched = time.perf_counter()
-                belief = database.broaden(belief)
+                belief = database.broaden(belief, final=True)
                 broaden_s += time.perf_counter() - searched
         best = belief.best
         steps.append(
@@ -259,7 +261,7 @@ def verify(
         # belief judging every pose the pair search refines (its time counted with the
         # last touch's)
         start = time.perf_counter()
-        belief = database.broaden(belief, last=True)
+        belief = database.broaden(belief, final=True)
         searched = time.perf_counter() - start
         broaden_s += searched
         steps[-1] = replace(steps[-1], recognition_time_s=steps[-1].recognition_time_s + searched)

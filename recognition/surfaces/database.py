@@ -50,10 +50,11 @@ PAIRED_TOUCHES = 1
 #: ... on this many models: the hypotheses' (most probable first), then those the
 #: broader search fits best.
 PAIRED_MODELS = 3
-#: The last look, after the touches (``broaden(..., last=True)``), refines this many of
-#: each model's pair poses and keeps every distinct one: no touch follows to test a rival
-#: that the curves rank low, so the belief judges them all on all the contact.
-LAST_REFINED = 64
+#: A search whose answer may end the touches (``broaden(..., final=True)``: after the
+#: touch that made the belief sure, or after the last touch) refines this many of each
+#: model's pair poses and keeps every distinct one: no touch follows to test a rival that
+#: the curves rank low, so the belief judges them all on all the contact.
+FINAL_REFINED = 64
 
 if TYPE_CHECKING:
     from recognition.surfaces.touch_planning import TouchLimits, TouchPlan
@@ -297,7 +298,7 @@ class ModelDatabase:
         surface normal sensed there, ``normals`` (k, 3) (rows of NaN: none)."""
         return belief.with_contacts(self.models, points, misses, windows, normals)
 
-    def broaden(self, belief: Belief, last: bool = False) -> Belief:
+    def broaden(self, belief: Belief, final: bool = False) -> Belief:
         """``belief`` with the poses of a broader search of its contact added: for when
         no hypothesis explains the contact (:attr:`Belief.unexplained`), to look for
         rivals of a sure answer, or for a better answer than an unsure one. Two searches:
@@ -312,8 +313,8 @@ class ModelDatabase:
         recognition would keep (:meth:`BeliefConfig.within_window`: within the window of
         the least error on the curves) join. Unchanged without curves, or when a broader
         search has already had all its touches (:attr:`Belief.touches`: those that met
-        nothing too, which rule out poses the last search kept). ``last``: the last look,
-        once the touches are spent (``LAST_REFINED``)."""
+        nothing too, which rule out poses the last search kept). ``final``: a search whose
+        answer may end the touches (``FINAL_REFINED``)."""
         if belief.curves is None or belief.broadened == belief.touches:
             return belief
         touches = belief.points[belief.n_curve_points :]
@@ -359,7 +360,7 @@ class ModelDatabase:
                 outlier_threshold_m(data_noise_m(belief.curves), wide),
                 seed=len(belief.windows),
                 misses=belief.misses,
-                **({"refined": LAST_REFINED, "kept": LAST_REFINED} if last else {}),
+                **({"refined": FINAL_REFINED, "kept": FINAL_REFINED} if final else {}),
             )
         # a pose that misses a touch could not compete; of the others, as a recognition's
         # poses become hypotheses (Belief.of): those that fit the curves within the window

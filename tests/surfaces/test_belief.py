@@ -302,7 +302,9 @@ def test_a_last_touch_that_leaves_the_belief_unsure_has_a_broader_search_after_i
     assert done.belief.broadened == 1  # not sure after it: searched again
 
 
-def test_the_last_look_after_the_touches_keeps_every_pair_pose_it_refines(database, monkeypatch):
+def test_a_search_whose_answer_may_end_the_touches_keeps_every_pair_pose_it_refines(
+    database, monkeypatch
+):
     synthetic = _curves(
         database["blob"], 2500, seed=2, noise=0.002e-3, n_points=21, spacing_m=0.6e-3
     )
@@ -322,10 +324,16 @@ def test_the_last_look_after_the_touches_keeps_every_pair_pose_it_refines(databa
 
     done = verify(database, result.belief, touch, _limits(synthetic), max_touches=1, confidence=1.0)
     assert done.belief.broadened == 1 and len(seen) == 1  # the one search after the touch
-    assert seen[0]["refined"] == seen[0]["kept"] == database_module.LAST_REFINED
+    assert seen[0]["refined"] == seen[0]["kept"] == database_module.FINAL_REFINED
     # a broader search during the touches keeps the search's own numbers
     database.broaden(done.steps[0].belief)
     assert len(seen) == 2 and "refined" not in seen[1]
+    # the search after the touch that makes the belief sure is as thorough as the last
+    sure_at = done.steps[0].confidence
+    assert result.belief.confidence < sure_at
+    seen.clear()
+    verify(database, result.belief, touch, _limits(synthetic), max_touches=1, confidence=sure_at)
+    assert len(seen) == 1 and seen[0]["refined"] == database_module.FINAL_REFINED
 
 
 def test_a_belief_a_search_made_sure_is_tested_by_a_touch(database, monkeypatch):
@@ -346,7 +354,7 @@ def test_a_belief_a_search_made_sure_is_tested_by_a_touch(database, monkeypatch)
     )
     assert lost.confidence < 0.5
     monkeypatch.setattr(
-        type(database), "broaden", lambda self, belief: belief if belief.touches else sure
+        type(database), "broaden", lambda self, belief, **_: belief if belief.touches else sure
     )
     done = verify(database, lost, lambda plan: plan.point, limits, max_touches=3)
     assert len(done.steps) == 1  # one touch, the one that tests the search's answer
