@@ -12,10 +12,9 @@ poses the first search never proposed, but which fit all the contact as well (or
 the hypotheses may all be wrong and still explain the contact), compete before an answer
 is called sure or given. The last two may end the touches, with no touch left to test a
 rival: they keep every pose their pair search refines (``ModelDatabase.broaden(...,
-final=True)``). After a touch
-that met nothing, or while no hypothesis explains the contact, the next touch is planned
-near the contact made (``LOST_WITHIN_M``), where the object surely is, when a touch there
-can tell the hypotheses apart. A belief that the
+final=True)``). After a touch that met nothing, or while no hypothesis explains the
+contact, the next touch is planned near the contact made (``LOST_WITHIN_M``), where the
+object surely is, when a touch there can tell the hypotheses apart. A belief that the
 broader search before a touch made sure is tested by that touch (planned with "none of
 these" counted ``MAX_NONE_WEIGHT`` probable among its outcomes): the search chose the
 poses that fit the contact best, and a pose so chosen may fit what it was chosen on and

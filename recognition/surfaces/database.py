@@ -36,7 +36,7 @@ from recognition.surfaces.registration import (
     register_all,
     registration_mode,
 )
-from recognition.surfaces.registration.contact_pairs import pair_search
+from recognition.surfaces.registration.contact_pairs import N_KEPT, N_REFINED, pair_search
 
 __all__ = ["DATABASE_FORMAT", "MeshRegistrationConfig", "ModelDatabase", "Recognition"]
 
@@ -360,7 +360,8 @@ class ModelDatabase:
                 outlier_threshold_m(data_noise_m(belief.curves), wide),
                 seed=len(belief.windows),
                 misses=belief.misses,
-                **({"refined": FINAL_REFINED, "kept": FINAL_REFINED} if final else {}),
+                refined=FINAL_REFINED if final else N_REFINED,
+                kept=FINAL_REFINED if final else N_KEPT,
             )
         # a pose that misses a touch could not compete; of the others, as a recognition's
         # poses become hypotheses (Belief.of): those that fit the curves within the window

@@ -23,6 +23,7 @@ from recognition.surfaces.belief import Belief
 from recognition.surfaces.mesh_model import MeshModel
 from recognition.surfaces.noise_model import huber
 from recognition.surfaces.registration import ALIGNED_SEARCH, FastConfig, data_geometry
+from recognition.surfaces.registration.contact_pairs import N_KEPT, N_REFINED
 from recognition.surfaces.registration.exact import smooth_normals
 from recognition.surfaces.registration.fast import register_fast
 from recognition.surfaces.touch_planning import (
@@ -327,7 +328,7 @@ def test_a_search_whose_answer_may_end_the_touches_keeps_every_pair_pose_it_refi
     assert seen[0]["refined"] == seen[0]["kept"] == database_module.FINAL_REFINED
     # a broader search during the touches keeps the search's own numbers
     database.broaden(done.steps[0].belief)
-    assert len(seen) == 2 and "refined" not in seen[1]
+    assert len(seen) == 2 and (seen[1]["refined"], seen[1]["kept"]) == (N_REFINED, N_KEPT)
     # the search after the touch that makes the belief sure is as thorough as the last
     sure_at = done.steps[0].confidence
     assert result.belief.confidence < sure_at
