@@ -407,7 +407,7 @@ class Belief:
         for name, entries in by_model.items():
             model = models[name]
             T = np.asarray([pose for pose, _ in entries])
-            R, t, _ = refine_poses(
+            R, t, signed, closest, face = refine_poses(
                 model.distance,
                 self.points,
                 T[:, :3, :3],
@@ -419,8 +419,6 @@ class Belief:
                 self.noise.huber_k,
             )
             moved = posed(R, t, self.points)
-            flat, closest, face = model.distance.signed_closest(moved.reshape(-1, 3))
-            signed = flat.reshape(len(R), -1)
             errors = np.mean(np.minimum(np.abs(signed), level), axis=1)
             symmetries = model.symmetries
             locations = R @ self.point + t

@@ -14,9 +14,10 @@ from recognition.surfaces.distance import MeshDistance
 __all__ = ["refine_poses"]
 
 Array = NDArray[np.float64]
-PoseState = tuple[Array, Array, Array, Array, Array, Array]
-"""R, t, the moved points, their distances, closest points and the unit normals of the
-faces they lie on."""
+IntArray = NDArray[np.int64]
+PoseState = tuple[Array, Array, Array, Array, Array, Array, IntArray]
+"""R, t, the moved points, their distances, closest points, the unit normals of the
+faces they lie on and those faces."""
 
 
 def refine_poses(
@@ -29,12 +30,13 @@ def refine_poses(
     threshold_m: float,
     whitening: Array | None = None,
     huber_k: float = np.inf,
-) -> tuple[Array, Array, Array]:
+) -> tuple[Array, Array, Array, Array, IntArray]:
     """Poses R (k, 3, 3), t (k, 3) of the points (n, 3) refined on exact closest points
     of a mesh: Levenberg-Marquardt on point-to-plane residuals, each point counted at most
-    ``threshold_m``; one closest-point query per step for all poses. Returns R, t and the
-    exact distances (k, n) at the results (see
-    :func:`~recognition.surfaces.registration.exact.refine_exact`).
+    ``threshold_m``; one closest-point query per step for all poses. Returns R, t and, at
+    the results, the exact signed distances (k, n) (positive outside, as
+    :meth:`MeshDistance.signed_closest`), the closest points (k, n, 3) and their faces
+    (k, n) (see :func:`~recognition.surfaces.registration.exact.refine_exact`).
 
     With ``whitening`` W (n, n) (the inverse of a Cholesky factor of the residuals'
     covariance), the signed residuals r (a point beyond the threshold at it) are fitted
@@ -48,7 +50,7 @@ def refine_poses(
         distance, q, face = distance_to.closest(X.reshape(-1, 3))
         k = len(R)
         normals = distance_to.normals_of(face).reshape(k, n, 3)
-        return R, t, X, distance.reshape(k, n), q.reshape(k, n, 3), normals
+        return R, t, X, distance.reshape(k, n), q.reshape(k, n, 3), normals, face.reshape(k, n)
 
     def signed(state: State) -> Array:
         """Point-to-plane residuals (k, n), at most the threshold in size."""
@@ -103,5 +105,6 @@ def refine_poses(
             step_tol=1e-7,
         ),
     )
-    R_out, t_out, _, distance, _, _ = result.state
-    return R_out, t_out, distance
+    R_out, t_out, X, distance, q, normals, face = result.state
+    side = np.einsum("kij,kij->ki", X - q, normals)
+    return R_out, t_out, np.where(side < 0, -distance, distance), q, face

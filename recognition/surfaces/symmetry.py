@@ -67,7 +67,7 @@ def _symmetric(
     good = np.zeros(len(rotations), bool)
     if len(keep):
         fit = points[:: max(1, len(points) // FIT_POINTS)]
-        R, t, _ = refine_poses(distance, fit, rotations[keep], t0[keep], 6, 1e-5, np.inf)
+        R, t, *_ = refine_poses(distance, fit, rotations[keep], t0[keep], 6, 1e-5, np.inf)
         motions[keep] = pose_matrix(R, t)
         moved = np.einsum("kij,nj->kni", R, points) + t[:, None]
         d = distance.closest(moved.reshape(-1, 3))[0].reshape(len(keep), -1)

@@ -72,7 +72,7 @@ def refine_exact(
     (4.8) at the result (outliers at the threshold), metres; ``points`` (n, 3) and ``t``
     in metres, ``R`` (3, 3).
     """
-    R_out, t_out, distance = refine_poses(
+    R_out, t_out, signed, _, _ = refine_poses(
         model.distance,
         np.asarray(points, float),
         np.asarray(R, float)[None],
@@ -81,7 +81,7 @@ def refine_exact(
         tolerance,
         threshold_m,
     )
-    return R_out[0], t_out[0], float(np.mean(np.minimum(distance[0], threshold_m)))
+    return R_out[0], t_out[0], float(np.mean(np.minimum(np.abs(signed[0]), threshold_m)))
 
 
 def polish(
@@ -119,7 +119,7 @@ def polish(
         # the model's symmetric images of each pose fit the data as well: polished with it
         images = np.einsum("sij,kjl->skil", model.symmetries, starts).reshape(-1, 4, 4)
         starts = np.concatenate([starts, images])
-    R, t, distance = refine_poses(
+    R, t, signed, _, _ = refine_poses(
         model.distance,
         np.asarray(curves.points, float),
         starts[:, :3, :3],
@@ -128,6 +128,7 @@ def polish(
         1e-4,
         threshold,
     )
+    distance = np.abs(signed)
     errors = np.mean(np.minimum(distance, threshold), axis=1)
     p = np.asarray(curves.points, float).mean(axis=0) if point is None else point
     order = distinct_poses(R, t, errors, p, len(errors))
