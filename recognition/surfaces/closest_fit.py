@@ -9,7 +9,7 @@ from scipy.spatial.transform import Rotation
 
 from recognition.least_squares import LeastSquaresConfig, State, damped_least_squares
 from recognition.rigid import point_to_plane_jacobian, posed
-from recognition.surfaces.distance import MeshDistance
+from recognition.surfaces.distance import MeshDistance, signed_by_side
 
 __all__ = ["refine_poses"]
 
@@ -106,5 +106,4 @@ def refine_poses(
         ),
     )
     R_out, t_out, X, distance, q, normals, face = result.state
-    side = np.einsum("kij,kij->ki", X - q, normals)
-    return R_out, t_out, np.where(side < 0, -distance, distance), q, face
+    return R_out, t_out, signed_by_side(X, q, normals, distance), q, face

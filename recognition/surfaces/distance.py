@@ -22,7 +22,14 @@ from scipy.spatial import cKDTree
 
 from recognition.rigid import cross
 
-__all__ = ["DistanceField", "MeshDistance", "folded_faces", "triangle_normals", "vertex_sums"]
+__all__ = [
+    "DistanceField",
+    "MeshDistance",
+    "folded_faces",
+    "signed_by_side",
+    "triangle_normals",
+    "vertex_sums",
+]
 
 Array = NDArray[np.float64]
 Array32 = NDArray[np.float32]
@@ -34,6 +41,14 @@ def triangle_normals(triangles: Array) -> Array:
     """Unit normals (f, 3) of triangles (f, 3, 3), by their corners' order."""
     fn = cross(triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0])
     return fn / np.maximum(np.linalg.norm(fn, axis=1, keepdims=True), 1e-300)
+
+
+def signed_by_side(points: Array, closest: Array, normals: Array, distance: Array) -> Array:
+    """The unsigned ``distance`` (...) of ``points`` (..., 3) from their ``closest`` points
+    (..., 3) on faces of outward unit ``normals`` (..., 3), negative where a point lies
+    behind its face (inside)."""
+    side = np.einsum("...i,...i->...", points - closest, normals)
+    return np.where(side < 0, -distance, distance)
 
 
 def folded_faces(vertices: Array, faces: IntArray) -> Mask:
@@ -249,10 +264,8 @@ class MeshDistance:
         """Signed distance (m,), closest point (m, 3) and face (m,) of each point (m, 3):
         :meth:`signed` with what it found on the way."""
         d, q, f = self.closest(points)
-        side = np.einsum(
-            "ij,ij->i", np.asarray(points, float).reshape(-1, 3) - q, self.normals_of(f)
-        )
-        return np.where(side < 0, -d, d), q, f
+        p = np.asarray(points, float).reshape(-1, 3)
+        return signed_by_side(p, q, self.normals_of(f), d), q, f
 
 
 @dataclass(frozen=True)
