@@ -61,10 +61,13 @@ def folded_faces(vertices: Array, faces: IntArray) -> Mask:
     point out. Area weighting gives such a face no say in its corners' normals, so the
     test finds it; on a closed, consistently oriented mesh no face of real size fails it.
     """
-    corners = vertices[faces]
-    weighted = cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
-    around = vertex_sums(faces, weighted, len(vertices))[faces].sum(axis=1)
-    return np.asarray(np.einsum("ij,ij->i", weighted, around) < 0.0)
+    from recognition.surfaces import mesh_kernels  # numba: imported when first needed
+
+    return np.asarray(
+        mesh_kernels.folded_faces(
+            np.ascontiguousarray(vertices, np.float64), np.ascontiguousarray(faces, np.int64)
+        )
+    )
 
 
 def vertex_sums(faces: IntArray, per_face: Array, n_vertices: int) -> Array:

@@ -29,6 +29,7 @@ __all__ = [
     "closest_points",
     "face_bounds",
     "first_hits",
+    "folded_faces",
     "interpolated_normals",
     "outward_normals",
 ]
@@ -566,4 +567,29 @@ def outward_normals(
         size = max(np.sqrt(x * x + y * y + z * z), 1e-300)
         sign = -1.0 if folded[f] else 1.0
         out[n, 0], out[n, 1], out[n, 2] = sign * (x / size), sign * (y / size), sign * (z / size)
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def folded_faces(vertices: Array, faces: IntArray) -> NDArray[np.bool_]:  # pragma: no cover
+    """Faces (f,) whose area-weighted normal points against the sum of those of the faces
+    at its corners (:func:`recognition.surfaces.distance.folded_faces`)."""
+    weighted = np.empty((faces.shape[0], 3))
+    sums = np.zeros((vertices.shape[0], 3))
+    for f in range(faces.shape[0]):
+        ux, uy, uz, vx, vy, vz = _edges(vertices, faces[f, 0], faces[f, 1], faces[f, 2])
+        weighted[f, 0], weighted[f, 1], weighted[f, 2] = (
+            uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx
+        )  # fmt: skip
+    for f in range(faces.shape[0]):
+        for k in range(3):
+            for i in range(3):
+                sums[faces[f, k], i] += weighted[f, i]
+    out = np.empty(faces.shape[0], np.bool_)
+    for f in range(faces.shape[0]):
+        dot = 0.0
+        for i in range(3):
+            around = sums[faces[f, 0], i] + sums[faces[f, 1], i] + sums[faces[f, 2], i]
+            dot += weighted[f, i] * around
+        out[f] = dot < 0.0
     return out
