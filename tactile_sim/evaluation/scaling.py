@@ -69,13 +69,17 @@ loaded_mb = rss_mb()
 in_use_mb = None
 if int(sys.argv[2]):  # then recognise curves on every model: the exact grids it builds
     import numpy as np
+    import trimesh
     from recognition import RecognitionError
     from recognition.synthetic import mesh_data_curves
     for i, m in enumerate(db.models.values()):
         rng = np.random.default_rng(i)
+        # the curves are cut from a copy of the mesh: the caches that cutting leaves on a
+        # mesh (its triangles, about 5 MB a model) are the benchmark's, not the search's
+        mesh = trimesh.Trimesh(m.vertices, m.faces, process=False)
         for v in rng.permutation(len(m.vertices))[:20]:  # the first that has curves
             try:
-                curves = mesh_data_curves(m.mesh, int(v), normal=m.normals[v], rng=rng).curves
+                curves = mesh_data_curves(mesh, int(v), normal=m.normals[v], rng=rng).curves
             except RecognitionError:
                 continue
             db.recognize(curves)
