@@ -549,6 +549,15 @@ def interpolated_normals(
     return out
 
 
+@numba.njit(cache=True, nogil=True, inline="always")
+def _face_cross(
+    vertices: Array, faces: IntArray, f: int
+) -> tuple[float, float, float]:  # pragma: no cover - compiled
+    """(b - a) x (c - a) of face ``f``, corners abc: its normal, twice its area long."""
+    ux, uy, uz, vx, vy, vz = _edges(vertices, faces[f, 0], faces[f, 1], faces[f, 2])
+    return uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx
+
+
 @numba.njit(cache=True, nogil=True)
 def outward_normals(
     vertices: Array, faces: IntArray, folded: NDArray[np.bool_], which: IntArray
@@ -561,9 +570,7 @@ def outward_normals(
         if f < 0:
             out[n, 0] = out[n, 1] = out[n, 2] = np.nan
             continue
-        a, b, c = faces[f, 0], faces[f, 1], faces[f, 2]
-        ux, uy, uz, vx, vy, vz = _edges(vertices, a, b, c)
-        x, y, z = uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx
+        x, y, z = _face_cross(vertices, faces, f)
         size = max(np.sqrt(x * x + y * y + z * z), 1e-300)
         sign = -1.0 if folded[f] else 1.0
         out[n, 0], out[n, 1], out[n, 2] = sign * (x / size), sign * (y / size), sign * (z / size)
@@ -577,10 +584,7 @@ def folded_faces(vertices: Array, faces: IntArray) -> NDArray[np.bool_]:  # prag
     weighted = np.empty((faces.shape[0], 3))
     sums = np.zeros((vertices.shape[0], 3))
     for f in range(faces.shape[0]):
-        ux, uy, uz, vx, vy, vz = _edges(vertices, faces[f, 0], faces[f, 1], faces[f, 2])
-        weighted[f, 0], weighted[f, 1], weighted[f, 2] = (
-            uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx
-        )  # fmt: skip
+        weighted[f, 0], weighted[f, 1], weighted[f, 2] = _face_cross(vertices, faces, f)
     for f in range(faces.shape[0]):
         for k in range(3):
             for i in range(3):
