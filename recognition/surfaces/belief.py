@@ -401,12 +401,9 @@ class Belief:
         :meth:`_whitening`."""
         level = self.noise.outlier_level_m(self.sensor_m)
         found: list[Hypothesis] = []
-        by_model: dict[str, list[tuple[Array, float]]] = {}
-        for name, T, evidence in hypotheses:
-            by_model.setdefault(name, []).append((T, evidence))
-        for name, entries in by_model.items():
+        for name, rows in _by_model([name for name, _, _ in hypotheses]).items():
             model = models[name]
-            T = np.asarray([pose for pose, _ in entries])
+            T = np.asarray([hypotheses[k][1] for k in rows])
             R, t, signed, closest, face = refine_poses(
                 model.distance,
                 self.points,
@@ -428,7 +425,7 @@ class Belief:
             )
             whitened = np.clip(signed, -level, level) @ whitening[: self.n_curve_points].T
             for k in range(len(R)):
-                evidence = entries[k][1]
+                evidence = hypotheses[rows[k]][2]
                 log_likelihood = evidence - float(np.sum(huber(whitened[k], self.noise.huber_k)))
                 log_likelihood += miss_evidence(
                     model.distance,
@@ -499,9 +496,9 @@ class Belief:
         the curves (and the misses) better are left out."""
         fitted = self._fitted([(n, T, 0.0) for n, T, _ in starts], models, whitening)
         out: list[tuple[str, Array, float]] = []
-        for name in dict.fromkeys(h.model for h in fitted):
+        for name, rows in _by_model([h.model for h in fitted]).items():
             known = [h for h in found if h.model == name]
-            mine = [h for h in fitted if h.model == name]
+            mine = [fitted[k] for k in rows]
             both = known + mine
             T = np.array([h.T_model_from_data for h in both])
             rank = np.r_[np.full(len(known), -np.inf), [-h.log_likelihood for h in mine]]
@@ -560,8 +557,7 @@ class Belief:
         ``whitening``: :meth:`_whitening` of all the points."""
         rows = whitening[self.n_curve_points + first :]
         out = np.zeros(len(hypotheses))
-        for name in dict.fromkeys(h.model for h in hypotheses):
-            mine = [k for k, h in enumerate(hypotheses) if h.model == name]
+        for name, mine in _by_model([h.model for h in hypotheses]).items():
             out[mine] = predicted_evidence(
                 models[name],
                 np.array([hypotheses[k].T_model_from_data for k in mine]),
@@ -577,21 +573,26 @@ class Belief:
         return [float(e) for e in out]
 
 
+def _by_model(names: Sequence[str]) -> dict[str, list[int]]:
+    """The indices of each model's entries in ``names``, models in order of first
+    appearance (the order in which :meth:`Belief._fitted` gives back their poses)."""
+    groups: dict[str, list[int]] = {}
+    for k, name in enumerate(names):
+        groups.setdefault(name, []).append(k)
+    return groups
+
+
 def _fitted_order(names: Sequence[str]) -> list[int]:
-    """The order in which :meth:`Belief._fitted` gives back poses of these models:
-    grouped by model, models in order of first appearance, each's in its order."""
-    first: dict[str, int] = {}
-    for name in names:
-        first.setdefault(name, len(first))
-    return sorted(range(len(names)), key=lambda k: first[names[k]])
+    """The order in which :meth:`Belief._fitted` gives back poses of these models."""
+    return [k for rows in _by_model(names).values() for k in rows]
 
 
 def _merged(found: Sequence[Hypothesis], point: Array) -> list[Hypothesis]:
     """One hypothesis per distinct pose of each model (the likeliest of those that came
     to the same answer)."""
     out: list[Hypothesis] = []
-    for name in dict.fromkeys(h.model for h in found):
-        mine = [h for h in found if h.model == name]
+    for rows in _by_model([h.model for h in found]).values():
+        mine = [found[k] for k in rows]
         T = np.array([h.T_model_from_data for h in mine])
         score = -np.array([h.log_likelihood for h in mine])
         out += [mine[k] for k in distinct_poses(T[:, :3, :3], T[:, :3, 3], score, point, len(mine))]
