@@ -1,8 +1,9 @@
 """Compiled loops of the fast search: the stacked distance fields' lookups
 (:class:`~recognition.surfaces.distance.FieldStack`), the normal equations of a pose's
-residuals on them, and the lookup (4.7) with the ring scores over a database's candidate
+residuals on them, the lookup (4.7) with the ring scores over a database's candidate
 index (:class:`~recognition.surfaces.registration.candidates.CandidateIndex`: one pass over
-a million rows instead of a dozen array passes).
+a million rows instead of a dozen array passes), and the greedy choice of distinct poses
+between the search's stages.
 
 The fast mode screens tens of thousands of candidate poses per recognition and slides
 thousands of them down the fields by Gauss-Newton (Section 4.2.2's search, batched): one
@@ -24,6 +25,7 @@ from numpy.typing import NDArray
 
 __all__ = [
     "candidate_scores",
+    "distinct_in_order",
     "interpolate",
     "nearest_in_frames",
     "rigid_normal_equations",
@@ -262,3 +264,41 @@ def candidate_scores(
         score[m] = s
         m += 1
     return keep[:m], score[:m]
+
+
+@numba.njit(cache=True, nogil=True)
+def distinct_in_order(
+    R: Array, location: Array, radius: float, cos_limit: float, n_keep: int
+) -> IntArray:  # pragma: no cover - compiled
+    """The greedy choice of :func:`~recognition.surfaces.registration.ambiguity.
+    distinct_poses` over poses R (k, 3, 3) already in order, best first, that put p at
+    ``location`` (k, 3): indices of at most ``n_keep``, each the best pose still alive,
+    which then kills every later pose within ``radius`` of it whose trace of R_i^T R_j
+    exceeds ``cos_limit`` (1 + 2 cos of the angle)."""
+    k = R.shape[0]
+    alive = np.ones(k, np.bool_)
+    kept = np.empty(max(min(k, n_keep), 0), np.int64)
+    count, i = 0, 0
+    while count < n_keep:
+        while i < k and not alive[i]:
+            i += 1
+        if i == k:
+            break
+        kept[count] = i
+        count += 1
+        alive[i] = False
+        for b in range(i + 1, k):
+            if not alive[b]:
+                continue
+            dx = location[b, 0] - location[i, 0]
+            dy = location[b, 1] - location[i, 1]
+            dz = location[b, 2] - location[i, 2]
+            if not np.sqrt(dx * dx + dy * dy + dz * dz) < radius:
+                continue
+            trace = 0.0
+            for r in range(3):
+                for c in range(3):
+                    trace += R[b, r, c] * R[i, r, c]
+            if trace > cos_limit:
+                alive[b] = False
+    return kept[:count]

@@ -41,18 +41,15 @@ def distinct_poses(
     """Indices of the ``n_keep`` best poses R (k, 3, 3), t (k, 3) (least ``errors``),
     skipping any pose that puts ``point`` (3,) within ``radius`` of a better kept pose
     while rotated less than ``angle`` from it; best first."""
+    from recognition.surfaces import field_kernels  # numba: imported when first needed
+
     order = np.argsort(errors, kind="stable")
-    R, location = R[order], R[order] @ point + t[order]
-    cos_limit = 1 + 2 * np.cos(angle)
-    alive = np.ones(len(order), bool)
-    kept: list[int] = []
-    while alive.any() and len(kept) < n_keep:
-        i = int(np.argmax(alive))  # the best pose still alive is kept
-        kept.append(i)
-        near = np.linalg.norm(location - location[i], axis=-1) < radius
-        alive &= ~(near & (np.einsum("bij,ij->b", R, R[i]) > cos_limit))
-        alive[i] = False  # (with a radius or an angle of 0 no pose stands for itself)
-    return order[np.array(kept, dtype=np.int64)]
+    R = np.ascontiguousarray(R[order], dtype=np.float64)
+    location = np.ascontiguousarray(R @ point + t[order], dtype=np.float64)
+    kept = field_kernels.distinct_in_order(
+        R, location, float(radius), float(1 + 2 * np.cos(angle)), int(n_keep)
+    )
+    return order[kept]
 
 
 @dataclass(frozen=True)
