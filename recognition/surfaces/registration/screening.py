@@ -123,18 +123,20 @@ def _thinned(
             continue
         pool = model.candidate_curvatures
         assert pool.d1 is not None  # the candidate map carries principal directions
+        cell = model.cell_keys(spacing)[pool.site[rows]]
+        order = np.lexsort((np.hypot(pool.k1[rows] - hyp.k1, pool.k2[rows] - hyp.k2), cell))
+        first = np.ones(order.size, bool)
+        first[1:] = cell[order[1:]] != cell[order[:-1]]
+        rows = rows[order[first]]
         site = pool.site[rows]
-        k1, k2 = pool.k1[rows], pool.k2[rows]
         parts.append(
             (
                 np.full(rows.size, w),
-                model.cell_keys(spacing)[site],
-                np.hypot(k1 - hyp.k1, k2 - hyp.k2),
                 site,
                 model.normals[site],
                 pool.d1[rows],
                 model.vertices[site],
-                k1 - k2,
+                pool.k1[rows] - pool.k2[rows],
             )
         )
     if not parts:
@@ -143,18 +145,11 @@ def _thinned(
             np.zeros(0, np.int64), empty, empty, empty, np.zeros(0), np.zeros(0, np.int64),
             np.zeros(len(models) + 1, np.int64),
         )  # fmt: skip
-    owner, cell, dist, site, normal, d1, origin, anisotropy = (
+    owner, site, normal, d1, origin, anisotropy = (
         np.concatenate(x) for x in zip(*parts, strict=True)
     )
-    order = np.lexsort((dist, cell, owner))
-    first = np.ones(order.size, bool)
-    first[1:] = (cell[order[1:]] != cell[order[:-1]]) | (owner[order[1:]] != owner[order[:-1]])
-    keep = order[first]
-    owner = owner[keep]
     start = np.searchsorted(owner, np.arange(len(models) + 1))
-    return _Candidates(
-        site[keep], normal[keep], d1[keep], origin[keep], anisotropy[keep], owner, start
-    )
+    return _Candidates(site, normal, d1, origin, anisotropy, owner, start)
 
 
 def screen(
