@@ -242,6 +242,7 @@ class ModelDatabase:
         names = self._checked_selection(curves, models, max_error_m)
         config = registration or self._config_of(mode)
         geometry = data_geometry(curves, config.geometry)
+        noise_m = data_noise_m(curves)
         chosen = [self.models[n] for n in names]
         if isinstance(config, FastConfig):
             index = self.field_of
@@ -253,6 +254,7 @@ class ModelDatabase:
                 stack=self.field_stack,
                 which_field=np.array([index[n] for n in names]),
                 index=self.candidate_index,
+                noise_m=noise_m,
             )
         else:
             found = register_all(chosen, curves, config, geometry=geometry, threads=self.threads)
@@ -277,7 +279,7 @@ class ModelDatabase:
             candidates,
             curve_points(curves, settings.points_per_curve),
             geometry.point,
-            data_noise_m(curves),
+            noise_m,
             noise=noise,
             config=settings,
             curves=curves,
@@ -323,6 +325,7 @@ class ModelDatabase:
         mismatch = max(config.model_mismatch_m, belief.noise.model_mismatch_m)
         wide = replace(config, search=ALIGNED_SEARCH, fallbacks=(), model_mismatch_m=mismatch)
         geometry = data_geometry(belief.curves, wide.geometry)
+        noise_m = data_noise_m(belief.curves)
         found = register_all(
             list(self.models.values()),
             belief.curves,
@@ -332,6 +335,7 @@ class ModelDatabase:
             which_field=np.arange(len(self)),
             index=self.candidate_index,
             contact=touches,
+            noise_m=noise_m,
         )
         poses = [
             (r.model, T, float(e))
@@ -357,7 +361,7 @@ class ModelDatabase:
                 geometry.normal,
                 touches[sensed],
                 belief.normals[sensed],
-                outlier_threshold_m(data_noise_m(belief.curves), wide),
+                outlier_threshold_m(noise_m, wide),
                 seed=len(belief.windows),
                 misses=belief.misses,
                 refined=FINAL_REFINED if final else N_REFINED,

@@ -99,6 +99,7 @@ def register_all(
     index: CandidateIndex | None = None,
     threads: int = 1,
     contact: ArrayLike | None = None,
+    noise_m: float | None = None,
 ) -> list[Registration]:
     """Register data curves on each of ``models``: one registration per model, in order.
 
@@ -121,6 +122,9 @@ def register_all(
     contact : (k, 3) float, optional
         Fast mode: further contact points in the curves' frame (verification touches)
         that choose the poses with the curves (:func:`register_fast`).
+    noise_m : float, optional
+        Fast mode: the data's noise across the surface, if already estimated (default
+        :func:`~recognition.surfaces.registration.data.data_noise_m`).
 
     Returns
     -------
@@ -142,6 +146,7 @@ def register_all(
             which_field=which_field,
             index=index,
             contact=contact,
+            noise_m=noise_m,
         )
 
     def one(model: Model) -> Registration:
